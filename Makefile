@@ -1,0 +1,58 @@
+# mi_brdfs — two commands do everything, set-up included:
+#   make render   renders the showcase scene to out/showcase.exr + out/showcase.png
+#   make test     runs the test suite
+# Both are idempotent: the set-up (system libraries, .venv) runs only when something is missing
+# or pyproject.toml changed.
+
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.mi_brdfs-installed
+OUT    := out
+SPP    ?= 64
+RES    ?= 256
+PYTEST_ARGS ?=
+
+.PHONY: all setup system render test bench figures clean distclean
+
+all: test
+
+# System libraries drjit needs (libLLVM >= 17, libatomic); installs them where it can.
+system:
+	@sh tools/setup-system.sh
+
+$(STAMP): pyproject.toml
+	@sh tools/setup-system.sh
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV) || { \
+	  echo "make: could not create $(VENV); install python3-venv (apt-get install python3-venv)"; exit 1; }
+	$(PY) -m pip install --disable-pip-version-check -q --upgrade pip
+	$(PY) -m pip install --disable-pip-version-check -q -e '.[test]'
+	@touch $@
+
+setup: $(STAMP)
+
+render: $(STAMP)
+	@mkdir -p $(OUT)
+	$(VENV)/bin/mi-brdfs render showcase -o $(OUT)/showcase.exr --spp $(SPP) -D res=$(RES)
+
+# pytest exits 5 when it collected no test: that is a broken suite, not a pass.
+test: $(STAMP)
+	@$(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "make test: pytest collected no tests (exit 5)"; exit 1; fi; \
+	exit $$rc
+
+bench: $(STAMP)
+	$(PY) validation/bench_render.py
+
+# The README's figures
+figures: $(STAMP)
+	@mkdir -p $(OUT)
+	$(VENV)/bin/mi-brdfs render showcase -o $(OUT)/showcase-hq.exr --spp 256 -D res=320 -q
+	cp $(OUT)/showcase-hq.png docs/showcase.png
+
+clean:
+	rm -rf $(OUT) .pytest_cache
+	find . -name __pycache__ -type d -prune -exec rm -rf {} +
+
+distclean: clean
+	rm -rf $(VENV)

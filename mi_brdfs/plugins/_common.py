@@ -1,0 +1,163 @@
+"""
+What every plugin of the package shares: reading and validating properties, and the few
+primitives whose best implementation differs between scalar and JIT variants.
+
+Property readers raise :class:`mi_brdfs.ParameterError` with one line naming the plugin, the
+parameter, the value and what is allowed. Mitsuba wraps an exception raised in a plugin
+constructor into its own ``RuntimeError`` (with the scene location); the CLI unwraps it again.
+"""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..errors import ParameterError
+
+# -------------------------------------------------------------------------------------------------
+# Variant primitives
+# -------------------------------------------------------------------------------------------------
+
+
+def variant_tools() -> SimpleNamespace:
+    """
+    Primitives for the current variant, looked up once when a plugin class is built.
+
+    In JIT variants ``select`` is ``dr.select`` and a new ``BSDFSample3f`` must come from
+    ``dr.zeros`` (a default-constructed one has width-0 fields that fail in ``mi.render``).
+    In scalar variants every BSDF call comes from C++ once per ray, so per-call cost is what
+    matters: ``dr.select`` on a Spectrum and ``dr.zeros(BSDFSample3f)`` cost about 1 µs each
+    there, a Python conditional and the (zero-initialised) default constructor 0.1 µs.
+    """
+    jit = dr.is_jit_v(mi.Float)
+    if jit:
+        select = dr.select
+
+        def new_sample():
+            return dr.zeros(mi.BSDFSample3f)
+
+        def none(mask):
+            return False  # unknowable while a kernel is traced symbolically
+    else:
+        def select(mask, a, b):
+            return a if mask else type(a)(b)
+
+        new_sample = mi.BSDFSample3f
+
+        def none(mask):
+            return not mask
+    return SimpleNamespace(
+        jit=jit,
+        select=select,
+        new_sample=new_sample,
+        # Mitsuba's dr::none_or<false>(mask): true only where it is known that no lane is active,
+        # i.e. in scalar variants for a false mask; an early return there saves the rest.
+        none=none,
+        # Mueller matrices in polarized variants; the identity elsewhere.
+        depolarize=mi.depolarizer if mi.is_polarized else (lambda value: value),
+    )
+
+
+def flag(*names: str) -> int:
+    """The integer OR of ``mi.BSDFFlags`` members given by name."""
+    value = 0
+    for name in names:
+        value |= int(getattr(mi.BSDFFlags, name))
+    return value
+
+
+# -------------------------------------------------------------------------------------------------
+# Property readers
+# -------------------------------------------------------------------------------------------------
+
+_T = None
+
+
+def _types():
+    global _T
+    if _T is None:
+        _T = mi.Properties.Type
+    return _T
+
+
+def _finite_in(x: float, lo: float, hi: float) -> bool:
+    return math.isfinite(x) and lo <= x <= hi
+
+
+def _as_float(value) -> float:
+    """A Python float from a Python scalar or a width-1 drjit array."""
+    return float(np.asarray(value, dtype=np.float64).ravel()[0])
+
+
+def texture_range(tex) -> tuple[float, float] | None:
+    """
+    The (min, max) a texture can return, where that can be known cheaply, else ``None``.
+
+    Exact for constant textures (``uniform``, ``srgb``) and for ``bitmap`` (its pixel data, after
+    Mitsuba's sRGB linearisation); ``None`` for procedural ones such as ``checkerboard``.
+    """
+    if not tex.is_spatially_varying():
+        mean = _as_float(tex.mean())
+        try:
+            hi = _as_float(tex.max())
+        except RuntimeError:  # Texture::max() is not implemented by every texture
+            hi = mean
+        # A constant texture's minimum is not exposed; its mean bounds it from above, which
+        # catches negative uniform values (the only way to get one: <rgb> is checked by Mitsuba).
+        return (min(mean, hi), hi)
+    params = mi.traverse(tex)
+    if "data" in params:
+        data = np.asarray(params["data"])
+        if np.issubdtype(data.dtype, np.integer):
+            # 8/16-bit storage: normalised values (sRGB-decoded at lookup), within [0, 1] by design
+            scale = float(np.iinfo(data.dtype).max)
+            return (float(data.min()) / scale, float(data.max()) / scale) if data.size else None
+        data = data.astype(np.float64)
+        if data.size:
+            finite = np.isfinite(data)
+            if not finite.all():
+                return (math.nan, math.nan)
+            return (float(data.min()), float(data.max()))
+    return None
+
+
+def reflectance(props, plugin: str, name: str, default: float):
+    """
+    A reflectance in [0, 1]: a float, ``<rgb>``, ``<spectrum>`` or any texture.
+
+    Returns → mi.Texture. Raises ParameterError for values outside [0, 1] or not finite, and for
+    properties that are not colours at all.
+    """
+    T = _types()
+    allowed = "must be finite and within [0, 1]"
+    if name in props:
+        kind = props.type(name)
+        if kind in (T.Float, T.Integer):
+            value = float(props[name])
+            if not _finite_in(value, 0.0, 1.0):
+                raise ParameterError(plugin, name, value, allowed)
+        elif kind == T.Color:
+            # Checked here, before Mitsuba's own check, so the message names plugin and parameter.
+            value = [float(c) for c in props[name]]
+            if not all(_finite_in(c, 0.0, 1.0) for c in value):
+                raise ParameterError(plugin, name, value, allowed + " in every channel")
+        elif kind in (T.Spectrum, T.Object):
+            tex = props.get_texture(name, default)
+            rng = texture_range(tex)
+            if rng is not None and not (_finite_in(rng[0], 0, 1) and _finite_in(rng[1], 0, 1)):
+                shown = f"a texture with values in [{rng[0]:g}, {rng[1]:g}]"
+                raise ParameterError(plugin, name, shown, allowed)
+            return tex
+        else:
+            raise ParameterError(plugin, name, props[name],
+                                 "must be a float, <rgb>, <spectrum> or a texture")
+    return props.get_texture(name, default)
+
+
+def indent(obj, amount: int = 2) -> str:
+    """``str(obj)`` with every line after the first indented, as Mitsuba's ``string::indent``."""
+    return str(obj).replace("\n", "\n" + " " * amount)

@@ -1,0 +1,160 @@
+"""
+Registration of the package's plugins with Mitsuba, in every variant.
+
+``mi.BSDF`` is a different class in each variant, and ``mi.register_bsdf`` registers for the
+*current* variant only. So each plugin module has a ``build()`` function that defines the plugin
+class on the current variant's ``mi.BSDF``; :func:`register` calls it once per variant, and a
+Mitsuba variant callback calls :func:`register` again after every later ``mi.set_variant``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import warnings
+
+import drjit as dr
+import mitsuba as mi
+
+from . import _env
+from .errors import MiBrdfsError, MiBrdfsWarning
+
+#: Plugin id -> module whose ``build()`` returns the plugin class for the current variant.
+PLUGINS = {
+    "lambert": "mi_brdfs.plugins.lambert",
+}
+
+# variant -> {plugin id -> class}
+_classes: dict[str, dict[str, type]] = {}
+
+
+def _builtin_plugin_names() -> set[str]:
+    """Names of Mitsuba's own plugins (one shared library each), which we must never shadow."""
+    folder = os.path.join(os.path.dirname(mi.__file__), "plugins")
+    try:
+        return {os.path.splitext(f)[0] for f in os.listdir(folder)}
+    except OSError:  # pragma: no cover - every wheel has the folder
+        return set()
+
+
+def register() -> list[str]:
+    """
+    Register every plugin of the package in the current Mitsuba variant.
+
+    Idempotent: a variant that is done already is left alone. Does nothing (and returns ``[]``)
+    when no variant is set; the variant callback installed at import registers once one is.
+
+    Returns → list[str]: the plugin ids now registered in the current variant.
+    """
+    variant = mi.variant()
+    if variant is None:
+        return []
+    if variant not in _classes:
+        builtins = _builtin_plugin_names()
+        classes = {}
+        for name, module in PLUGINS.items():
+            if name in builtins:  # would silently replace Mitsuba's plugin for this variant
+                raise RuntimeError(f"mi_brdfs: plugin id '{name}' shadows a Mitsuba built-in")
+            cls = importlib.import_module(module).build()
+            mi.register_bsdf(name, cls)
+            classes[name] = cls
+        _classes[variant] = classes
+    return sorted(_classes[variant])
+
+
+def registered_variants() -> list[str]:
+    """The variants in which :func:`register` has registered the plugins."""
+    return sorted(_classes)
+
+
+def plugin_class(name: str, variant: str | None = None) -> type:
+    """The Python class of plugin ``name`` in ``variant`` (default: the current one)."""
+    variant = variant or mi.variant()
+    if variant not in _classes:
+        raise MiBrdfsError(f"mi_brdfs: plugins are not registered in variant {variant!r}")
+    return _classes[variant][name]
+
+
+def llvm_usable() -> bool:
+    """Whether drjit's LLVM backend is loaded with a libLLVM that works."""
+    return bool(dr.has_backend(dr.JitBackend.LLVM)) and _env.loaded_llvm_problem() is None
+
+
+def default_variant() -> str:
+    """``llvm_ad_rgb`` where the LLVM backend works, else ``scalar_rgb``."""
+    return "llvm_ad_rgb" if llvm_usable() else "scalar_rgb"
+
+
+def use_variant(variant: str | None = None, fallback: bool = True) -> str:
+    """
+    Set a Mitsuba variant and register the plugins in it.
+
+    Parameter ``variant`` (str | None): the variant; ``None`` means :func:`default_variant`.
+
+    Parameter ``fallback`` (bool): when an ``llvm_*`` variant is asked for but no working libLLVM
+    is there, warn in one line and use the scalar counterpart instead of failing.
+
+    Returns → str: the variant now set.
+    """
+    if variant is None:
+        variant = default_variant()
+        if variant == "scalar_rgb" and not llvm_usable():
+            _warn_no_llvm("llvm_ad_rgb", variant)
+    available = mi.variants()
+    if variant not in available:
+        raise MiBrdfsError(f"unknown variant '{variant}'; this Mitsuba has: {', '.join(available)}")
+    if variant.startswith("llvm_") and not llvm_usable():
+        if not fallback:
+            raise MiBrdfsError(f"variant '{variant}' is unusable: {_llvm_problem()}")
+        scalar = variant.replace("llvm_ad_", "scalar_")
+        scalar = scalar if scalar in available else "scalar_rgb"
+        _warn_no_llvm(variant, scalar)
+        variant = scalar
+    try:
+        mi.set_variant(variant)
+    except (ImportError, RuntimeError) as e:
+        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        raise MiBrdfsError(f"variant '{variant}' is unusable here: {first}") from None
+    register()
+    return variant
+
+
+def _llvm_problem() -> str:
+    return (_env.loaded_llvm_problem() or _env.find_llvm().message
+            or f"drjit's LLVM backend is off; fix: {_env.LLVM_FIX}")
+
+
+_warned: set = set()
+
+
+def _warn_no_llvm(wanted: str, instead: str) -> None:
+    """Say once per process, in one line, why an LLVM variant is not used and how to fix it."""
+    if (wanted, instead) not in _warned:
+        _warned.add((wanted, instead))
+        warnings.warn(f"{_llvm_problem()}; using {instead} instead of {wanted}", MiBrdfsWarning,
+                      stacklevel=3)
+
+
+def _on_variant_change(old, new) -> None:
+    try:
+        register()
+    except Exception as e:  # a callback must not break mi.set_variant itself
+        warnings.warn(f"mi_brdfs: registering the plugins in {new} failed: {e}", MiBrdfsWarning)
+
+
+_installed = False
+
+
+def _install() -> None:
+    """Register in the current variant now and after every later ``mi.set_variant``."""
+    global _installed
+    if _installed:
+        return
+    _installed = True
+    mi.detail.add_variant_callback(_on_variant_change)
+    if _env.DRJIT_IMPORTED_FIRST and mi.variant() and mi.variant().startswith("llvm_"):
+        problem = _env.loaded_llvm_problem()
+        if problem:
+            warnings.warn(problem, MiBrdfsWarning, stacklevel=3)
+    register()
+

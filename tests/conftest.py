@@ -1,0 +1,56 @@
+"""
+Variant fixtures, after the pattern of Mitsuba's own ``src/conftest.py`` (not shipped in the
+wheel): each sets its variant, registers the plugins there, and yields the variant name.
+LLVM variants are skipped, with the reason, where no working libLLVM is installed.
+"""
+
+import numpy as np
+import pytest
+
+import mi_brdfs  # noqa: F401  (import first: it chooses the libLLVM before drjit loads)
+import drjit as dr
+
+LLVM_OK = mi_brdfs.llvm_usable()
+REQUIRED = ["scalar_rgb", "llvm_ad_rgb"]
+CHEAP = ["scalar_spectral", "llvm_ad_spectral", "llvm_ad_mono"]
+
+
+def set_variant(name: str) -> str:
+    if name.startswith("llvm_") and not LLVM_OK:
+        pytest.skip(f"{name}: no working libLLVM ({mi_brdfs._env.find_llvm().message})")
+    return mi_brdfs.use_variant(name, fallback=False)
+
+
+@pytest.fixture(autouse=True)
+def _jit_cleanup():
+    yield
+    if dr.has_backend(dr.JitBackend.LLVM):
+        dr.sync_thread()
+        dr.kernel_history_clear()
+
+
+@pytest.fixture
+def variant_scalar_rgb():
+    return set_variant("scalar_rgb")
+
+
+@pytest.fixture
+def variant_llvm_ad_rgb():
+    return set_variant("llvm_ad_rgb")
+
+
+@pytest.fixture(params=REQUIRED)
+def variants_rgb(request):
+    """scalar_rgb and llvm_ad_rgb."""
+    return set_variant(request.param)
+
+
+@pytest.fixture(params=REQUIRED + CHEAP)
+def variants_all(request):
+    """The required variants plus spectral and mono."""
+    return set_variant(request.param)
+
+
+@pytest.fixture
+def np_rng():
+    return np.random.default_rng(12345)

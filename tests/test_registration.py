@@ -1,0 +1,84 @@
+"""Registration of the plugins in every variant, on import and after later set_variant calls."""
+
+import subprocess
+import sys
+
+import mitsuba as mi
+import pytest
+
+import mi_brdfs
+from conftest import LLVM_OK
+
+
+def test01_loadable_in_every_variant(variants_all):
+    for name in mi_brdfs.PLUGINS:
+        bsdf = mi.load_dict({"type": name})
+        assert isinstance(bsdf, mi.BSDF)  # the BSDF class of *this* variant
+        assert type(bsdf) is mi_brdfs.plugin_class(name)
+    assert mi.variant() in mi_brdfs.registered_variants()
+
+
+def test02_loadable_from_xml(variants_all):
+    for name in mi_brdfs.PLUGINS:
+        bsdf = mi.load_string(f'<bsdf version="3.0.0" type="{name}"/>')
+        assert type(bsdf).__name__ == mi_brdfs.plugin_class(name).__name__
+
+
+def test03_register_is_idempotent(variants_rgb):
+    classes = {n: mi_brdfs.plugin_class(n) for n in mi_brdfs.PLUGINS}
+    assert mi_brdfs.register() == sorted(mi_brdfs.PLUGINS)
+    assert mi_brdfs.register() == sorted(mi_brdfs.PLUGINS)
+    assert {n: mi_brdfs.plugin_class(n) for n in mi_brdfs.PLUGINS} == classes
+
+
+def test04_no_builtin_is_shadowed(variants_rgb):
+    from mi_brdfs.registry import _builtin_plugin_names
+    builtins = _builtin_plugin_names()
+    assert {"diffuse", "roughconductor", "dielectric"} <= builtins
+    assert not builtins & set(mi_brdfs.PLUGINS)
+    assert type(mi.load_dict({"type": "diffuse"})).__module__.startswith("mitsuba")
+
+
+SCRIPT = r"""
+import mitsuba as mi
+import mi_brdfs                         # no variant yet: nothing to register, no error
+assert mi_brdfs.registered_variants() == [], mi_brdfs.registered_variants()
+for v in VARIANTS:
+    mi.set_variant(v)                   # the variant callback registers
+    assert type(mi.load_dict({'type': 'lambert'})).__name__ == 'Lambert', v
+mi.set_variant(VARIANTS[0])             # switching back keeps working
+mi.load_dict({'type': 'lambert'})
+print('OK', mi_brdfs.registered_variants())
+"""
+
+
+def test05_registers_after_any_later_set_variant():
+    """In a fresh interpreter: import before any variant, then set several variants."""
+    variants = ["scalar_rgb", "scalar_spectral"]
+    variants += ["llvm_ad_rgb", "llvm_ad_mono"] if LLVM_OK else []
+    code = SCRIPT.replace("VARIANTS", repr(variants))
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "OK" in proc.stdout and all(v in proc.stdout for v in variants)
+
+
+def test06_use_variant_rejects_unknown():
+    with pytest.raises(mi_brdfs.MiBrdfsError, match="unknown variant 'llvm_rgb'; this Mitsuba has"):
+        mi_brdfs.use_variant("llvm_rgb")
+
+
+def test07_polarized_variants_render_like_diffuse():
+    """Not advertised, but registered: results pass through mi.depolarizer there."""
+    import numpy as np
+    images = []
+    mi_brdfs.use_variant("scalar_spectral_polarized")
+    for m in ("lambert", "diffuse"):
+        scene = mi.load_dict({
+            "type": "scene", "integrator": {"type": "path", "max_depth": 2},
+            "e": {"type": "constant"},
+            "s": {"type": "sphere", "bsdf": {"type": m, "reflectance": 0.7}},
+            "sensor": {"type": "perspective", "to_world": mi.ScalarTransform4f().look_at(
+                origin=[0, 0, 4], target=[0, 0, 0], up=[0, 1, 0]),
+                "film": {"type": "hdrfilm", "width": 8, "height": 8}}})
+        images.append(np.array(mi.render(scene, spp=4, seed=1)))
+    np.testing.assert_allclose(images[0], images[1], atol=1e-5)

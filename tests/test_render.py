@@ -1,0 +1,72 @@
+"""The progressive render path: passes, accumulation, time budget, process arrangement."""
+
+import mitsuba as mi
+import numpy as np
+import pytest
+
+from mi_brdfs.errors import MiBrdfsError
+from mi_brdfs.render import pass_seed, render, uses_python_plugins
+from mi_brdfs.scenes import load_scene
+
+
+def test01_pass_seeds_are_distinct_across_base_seeds():
+    seeds = {pass_seed(s, i) for s in range(64) for i in range(512)}
+    assert len(seeds) == 64 * 512
+    assert pass_seed(0, 0) == 0 and pass_seed(1, 0) == 65536
+
+
+def test02_passes_accumulate_to_the_mean_of_their_renders(variant_llvm_ad_rgb):
+    """A 4-pass render equals the spp-weighted mean of the four single renders it made."""
+    result = render("cbox", spp=16, pass_spp=4, defines={"res": "16"}, progress=False)
+    assert (result.spp, result.passes, result.arrangement) == (16, 4, "jit")
+    scene = load_scene("cbox", res=16)
+    passes = [np.array(mi.render(scene, seed=pass_seed(0, i), spp=4)) for i in range(4)]
+    np.testing.assert_allclose(result.image, np.mean(passes, axis=0), rtol=1e-6, atol=1e-7)
+    assert np.isfinite(result.image).all()
+
+
+def test03_uneven_last_pass(variant_llvm_ad_rgb):
+    result = render("furnace", spp=10, pass_spp=4, defines={"res": "8"}, progress=False)
+    assert (result.spp, result.passes) == (10, 3)
+    assert abs(result.image.mean() - 1.0) < 0.02
+
+
+def test04_time_budget_stops_early(variant_llvm_ad_rgb):
+    result = render("furnace", time_budget=0.5, pass_spp=1, defines={"res": "8"}, progress=False)
+    assert 1 <= result.spp and result.wall_time < 0.5 + 0.5  # no pass starts past the budget
+    assert result.passes == result.spp
+
+
+def test05_python_plugins_detected(variant_scalar_rgb):
+    assert uses_python_plugins(load_scene("cbox", material="lambert", res=4))
+    assert not uses_python_plugins(load_scene("cbox", material="diffuse", res=4))
+
+
+def test06_scalar_processes_equal_one_thread(variant_scalar_rgb):
+    """Spread over 2 worker processes, the scalar render gives the one-process image exactly."""
+    defines = {"res": "8", "material": "lambert", "max_depth": "3"}
+    one = render("cbox", spp=8, pass_spp=2, defines=defines, processes=1, progress=False)
+    two = render("cbox", spp=8, pass_spp=2, defines=defines, processes=2, progress=False)
+    assert one.arrangement == "1 thread"
+    assert two.arrangement in ("2 processes × 1 thread", "1 thread")  # when it does not pay
+    np.testing.assert_allclose(one.image, two.image, rtol=1e-6, atol=1e-7)
+
+
+def test07_scalar_forced_into_processes(variant_scalar_rgb, monkeypatch):
+    """With worker start-up made free, the pool path runs and matches the in-process image."""
+    import mi_brdfs.render as R
+    monkeypatch.setattr(R, "WORKER_START_S", 0.0)
+    defines = {"res": "8", "material": "lambert", "max_depth": "3"}
+    two = render("cbox", spp=8, pass_spp=2, defines=defines, processes=2, progress=False)
+    assert two.arrangement == "2 processes × 1 thread"
+    one = render("cbox", spp=8, pass_spp=2, defines=defines, processes=1, progress=False)
+    np.testing.assert_allclose(one.image, two.image, rtol=1e-6, atol=1e-7)
+
+
+def test08_bad_arguments(variant_scalar_rgb):
+    with pytest.raises(MiBrdfsError, match="spp must be at least 1"):
+        render("furnace", spp=0, progress=False)
+    with pytest.raises(MiBrdfsError, match="does not exist"):
+        render("no_such_scene.xml", progress=False)
+    with pytest.raises(MiBrdfsError, match="time budget must be a positive"):
+        render("furnace", time_budget=-1, progress=False)

@@ -1,0 +1,18 @@
+"""The validation scripts run (quick mode), so they cannot rot between campaigns."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test01_bench_render_quick(tmp_path):
+    out = tmp_path / "bench.json"
+    p = subprocess.run([sys.executable, str(ROOT / "validation" / "bench_render.py"), "--quick",
+                        "--json", str(out)], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert "| lambert vs diffuse | scalar_rgb |" in p.stdout
+    import json
+    rows = json.loads(out.read_text())
+    assert all(r["median_ratio"] > 0 and len(r["plugin_s"]) == r["repeats"] for r in rows)

@@ -1,0 +1,53 @@
+#!/bin/sh
+# System libraries that drjit 1.5 needs and minimal Debian/Ubuntu images lack:
+#   - libLLVM >= 17 for the LLVM (JIT) variants: Debian 12's default LLVM 15 aborts inside the JIT.
+#     We install libllvm19, which is known to work.
+#   - libatomic.so.1: without it `import drjit` fails with a misleading NameError.
+# Installs them with apt-get when run as root (or with password-less sudo); otherwise it says what
+# to install and carries on: mi_brdfs then falls back to the scalar_rgb variant.
+set -u
+
+have_llvm() {
+  for f in /usr/lib/*-linux-gnu/libLLVM* /usr/lib/llvm-*/lib/libLLVM* /usr/lib64/libLLVM* \
+           /usr/local/lib/libLLVM*; do
+    [ -e "$f" ] || continue
+    v=$(echo "$f" | sed -n 's/.*libLLVM[-.]\([0-9][0-9]*\).*/\1/p; s/.*llvm-\([0-9][0-9]*\)\/lib.*/\1/p' | head -n 1)
+    [ -n "$v" ] && [ "$v" -ge 17 ] && return 0
+  done
+  return 1
+}
+
+have_atomic() {
+  ldconfig -p 2>/dev/null | grep -q 'libatomic\.so\.1' && return 0
+  for f in /usr/lib/*-linux-gnu/libatomic.so.1 /usr/lib64/libatomic.so.1 /usr/lib/libatomic.so.1; do
+    [ -e "$f" ] && return 0
+  done
+  return 1
+}
+
+[ "$(uname -s)" = Linux ] || exit 0
+missing=""
+have_llvm || missing="$missing libllvm19"
+have_atomic || missing="$missing libatomic1"
+[ -z "$missing" ] && exit 0
+
+if ! command -v apt-get >/dev/null 2>&1; then
+  echo "setup: please install$missing (LLVM >= 17 and libatomic) with your package manager;"
+  echo "setup: until then mi_brdfs uses the scalar_rgb variant"
+  exit 0
+fi
+if [ "$(id -u)" -eq 0 ]; then SUDO=""
+elif command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then SUDO="sudo -n"
+else
+  echo "setup: not root: run 'sudo apt-get install$missing' for the LLVM variants;"
+  echo "setup: until then mi_brdfs uses the scalar_rgb variant"
+  exit 0
+fi
+echo "setup: installing$missing"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get install -y -q --no-install-recommends $missing >/dev/null 2>&1 || {
+  $SUDO apt-get update -q >/dev/null 2>&1
+  $SUDO apt-get install -y -q --no-install-recommends $missing >/dev/null || \
+    echo "setup: apt-get could not install$missing; mi_brdfs will use the scalar_rgb variant"
+}
+exit 0
