@@ -1,17 +1,24 @@
 """
 One way to name a BSDF everywhere: a ``mi.load_dict`` dict, an XML fragment (``<bsdf ...>``),
-or an already loaded ``mi.BSDF``. :func:`load_bsdf` turns any of them into a ``mi.BSDF`` in the
-current variant, with one-line errors.
+a command-line string ``'roughconductor alpha=0.3 material=Au'``, or an already loaded
+``mi.BSDF``. :func:`load_bsdf` turns any of them into a ``mi.BSDF`` in the current variant,
+with one-line errors.
 """
 
 from __future__ import annotations
+
+import os
+import re
+import shlex
+from xml.sax.saxutils import quoteattr
 
 from .errors import MiBrdfsError
 
 
 def load_bsdf(spec):
     """
-    A ``mi.BSDF`` from a dict, an XML fragment or a ``mi.BSDF`` (returned as is).
+    A ``mi.BSDF`` from a dict, an XML fragment, a ``'type key=value ...'`` string or a
+    ``mi.BSDF`` (returned as is).
 
     Raises MiBrdfsError with one line when Mitsuba or the plugin rejects the specification.
     """
@@ -31,8 +38,14 @@ def load_bsdf(spec):
             if "version=" not in xml.split(">", 1)[0]:
                 xml = xml.replace("<bsdf", '<bsdf version="3.0.0"', 1)
             obj = mi.load_string(xml)
+        elif isinstance(spec, str):
+            specs = parse_cli(shlex.split(spec))
+            if len(specs) != 1:
+                raise MiBrdfsError(f"'{spec}' names {len(specs)} BSDFs, not one")
+            return load_bsdf(specs[0])
         else:
-            raise MiBrdfsError(f"cannot make a BSDF from {spec!r}: give a dict or an XML fragment")
+            raise MiBrdfsError(f"cannot make a BSDF from {spec!r}: give a dict, an XML fragment "
+                               f"or 'type key=value ...'")
     except RuntimeError as e:
         raise MiBrdfsError(mitsuba_error_line(e)) from None
     if not isinstance(obj, mi.BSDF):
@@ -58,3 +71,164 @@ def _short(value) -> str:
     if isinstance(value, float):
         return f"{value:g}"
     return str(value)
+
+
+def plugin_kind(name: str) -> str:
+    """
+    'BSDF', 'Texture', 'Shape', ... or 'Unknown' for a plugin name in the current variant.
+
+    ``PluginManager.plugin_type`` knows Python plugins only in the variant where they were
+    registered first, so a plugin it calls Unknown is instantiated to find out.
+    """
+    import mitsuba as mi
+
+    kind = str(mi.PluginManager.instance().plugin_type(name)).split(".")[-1]
+    if kind != "Unknown":
+        return kind
+    try:
+        obj = mi.load_dict({"type": name})
+    except RuntimeError as e:
+        return "Unknown" if "not found" in str(e) else "BSDF"  # exists, but needs parameters
+    for kind in ("BSDF", "Texture", "Shape", "Emitter", "Sensor", "Integrator"):
+        if isinstance(obj, getattr(mi, kind)):
+            return kind
+    return type(obj).__name__
+
+
+# -------------------------------------------------------------------------------------------------
+# dict -> XML (to put a BSDF given as a dict into an XML scene)
+# -------------------------------------------------------------------------------------------------
+
+
+def _xml_value(name: str, value, indent: str) -> str:
+    n = quoteattr(name)
+    if isinstance(value, bool):
+        return f'{indent}<boolean name={n} value="{str(value).lower()}"/>'
+    if isinstance(value, int):
+        return f'{indent}<integer name={n} value="{value}"/>'
+    if isinstance(value, float):
+        return f'{indent}<float name={n} value="{value!r}"/>'
+    if isinstance(value, str):
+        return f"{indent}<string name={n} value={quoteattr(value)}/>"
+    if isinstance(value, dict):
+        kind = value.get("type")
+        if kind == "rgb":
+            v = ", ".join(repr(float(x)) for x in _as_list(value["value"]))
+            return f'{indent}<rgb name={n} value="{v}"/>'
+        if kind == "spectrum":
+            v = value["value"]
+            if isinstance(v, (int, float)):
+                text = repr(float(v))
+            else:
+                text = ", ".join(f"{float(w)!r}:{float(x)!r}" for w, x in v)
+            return f'{indent}<spectrum name={n} value="{text}"/>'
+        return _xml_object(value, indent, name=name)
+    raise MiBrdfsError(f"cannot write parameter {name!r} = {value!r} as XML")
+
+
+def _as_list(value) -> list:
+    if isinstance(value, (int, float)):
+        return [float(value)] * 3
+    return [float(x) for x in value]
+
+
+def _xml_object(spec: dict, indent: str = "", name: str | None = None) -> str:
+
+    kind = spec.get("type")
+    if not isinstance(kind, str):
+        raise MiBrdfsError(f"a BSDF dict needs a 'type' (e.g. 'diffuse'), got {spec}")
+    tag = {"BSDF": "bsdf", "Texture": "texture", "Spectrum": "spectrum"}.get(plugin_kind(kind))
+    if tag is None:
+        raise MiBrdfsError(f"unknown plugin '{kind}' (not a BSDF or texture of this Mitsuba)")
+    attrs = f" type={quoteattr(kind)}"
+    if name:
+        attrs += f" name={quoteattr(name)}"
+    if "id" in spec:
+        attrs += f" id={quoteattr(str(spec['id']))}"
+    children = [_xml_value(k, v, indent + "    ") for k, v in spec.items()
+                if k not in ("type", "id")]
+    if not children:
+        return f"{indent}<{tag}{attrs}/>"
+    return "\n".join([f"{indent}<{tag}{attrs}>"] + children + [f"{indent}</{tag}>"])
+
+
+def to_xml(spec, id: str | None = None) -> str:
+    """
+    An XML ``<bsdf>`` element for a BSDF given as a dict or an XML fragment, with ``id`` set.
+    Dict values: bool, int, float, str, ``{'type': 'rgb'|'spectrum', 'value': ...}`` and nested
+    plugin dicts (textures, BSDFs).
+    """
+    if isinstance(spec, dict):
+        spec = dict(spec, id=id) if id else spec
+        return _xml_object(spec)
+    if isinstance(spec, str) and spec.lstrip().startswith("<"):
+        xml = spec.strip()
+        if id:
+            xml = re.sub(r"\sid=(\"[^\"]*\"|'[^']*')", "", xml, count=1)
+            xml = xml.replace("<bsdf", f"<bsdf id={quoteattr(id)}", 1)
+        return xml
+    raise MiBrdfsError(f"cannot put {spec!r} into an XML scene: give a dict or an XML fragment")
+
+
+# -------------------------------------------------------------------------------------------------
+# Command-line BSDF specifications: `type key=value ...`, several per command line
+# -------------------------------------------------------------------------------------------------
+
+
+def parse_value(text: str):
+    """
+    A command-line parameter value: ``true``/``false`` → bool, a number → float, three
+    comma-separated numbers → ``{'type': 'rgb'}``, anything else → str (``Au``, ``ggx``).
+    """
+    low = text.strip().lower()
+    if low in ("true", "false"):
+        return low == "true"
+    parts = [p for p in text.split(",")]
+    try:
+        numbers = [float(p) for p in parts]
+    except ValueError:
+        return text
+    if len(numbers) == 1:
+        return numbers[0]
+    if len(numbers) == 3:
+        return {"type": "rgb", "value": numbers}
+    raise MiBrdfsError(f"'{text}': a value is a number or three comma-separated numbers (rgb)")
+
+
+def parse_cli(tokens: list[str]) -> list:
+    """
+    BSDFs from command-line tokens. A token without '=' starts a BSDF: a plugin name (followed
+    by its ``key=value`` parameters), an XML file holding one ``<bsdf>``, or an XML fragment.
+
+        parse_cli(['roughconductor', 'alpha=0.3', 'material=Au', 'diffuse'])
+        → [{'type': 'roughconductor', 'alpha': 0.3, 'material': 'Au'}, {'type': 'diffuse'}]
+    """
+
+    specs: list = []
+    for token in tokens:
+        if "=" in token and not token.lstrip().startswith("<"):
+            key, _, value = token.partition("=")
+            if not specs or not isinstance(specs[-1], dict):
+                raise MiBrdfsError(f"parameter '{token}' comes before any BSDF name "
+                                   f"(write e.g. 'roughconductor alpha=0.3')")
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.]*", key) or value == "":
+                raise MiBrdfsError(f"malformed parameter '{token}': expected key=value")
+            specs[-1][key] = parse_value(value)
+        elif token.lstrip().startswith("<"):
+            specs.append(token)
+        elif token.endswith(".xml"):
+            if not os.path.isfile(token):
+                raise MiBrdfsError(f"BSDF file {token} does not exist")
+            with open(token) as f:
+                specs.append(f.read())
+        else:
+            kind = plugin_kind(token)
+            if kind == "Unknown":
+                raise MiBrdfsError(f"unknown plugin '{token}' "
+                                   f"(neither Mitsuba nor mi_brdfs has it)")
+            if kind != "BSDF":
+                raise MiBrdfsError(f"plugin '{token}' is a {kind.lower()}, not a BSDF")
+            specs.append({"type": token})
+    if not specs:
+        raise MiBrdfsError("no BSDF given (e.g. 'diffuse' or 'roughconductor alpha=0.3')")
+    return specs

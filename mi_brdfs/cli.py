@@ -63,9 +63,160 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_render)
 
+    bsdf_help = ("one or more BSDFs: a plugin name followed by its key=value parameters "
+                 "(e.g. roughconductor alpha=0.3 material=Au diffuse), an XML file, or a "
+                 "quoted XML fragment")
+
+    c = sub.add_parser("check", help="run every check on one or more BSDFs",
+                       description="Run the whole battery (consistency, χ² sampling, energy, "
+                                   "albedo agreement, reciprocity, positivity, stability; "
+                                   "optionally the furnace render) and print a table. Exit "
+                                   "status 1 when a check fails.")
+    c.add_argument("bsdf", nargs="+", metavar="BSDF", help=bsdf_help)
+    _add_variant(c)
+    c.add_argument("--quick", action="store_true", help="10× fewer samples")
+    c.add_argument("--render", action="store_true", help="also render the white furnace")
+    c.add_argument("--json", metavar="FILE", help="also write the results as JSON")
+    c.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no messages")
+    c.set_defaults(func=cmd_check)
+
+    f = sub.add_parser("furnace", help="directional albedo table; optionally the furnace render",
+                       description="Directional albedo E(θ) over incident angles by every "
+                                   "estimator (sample() weights ± error, eval() Monte Carlo, "
+                                   "quadrature, float64 reference), and with --render the "
+                                   "white furnace image (EXR + PNG).")
+    f.add_argument("bsdf", nargs="+", metavar="BSDF", help=bsdf_help)
+    _add_variant(f)
+    f.add_argument("--thetas", metavar="DEG,...", help="incident angles in degrees")
+    f.add_argument("-n", "--samples", type=int, metavar="N", help="samples per angle")
+    f.add_argument("--render", action="store_true", help="render the furnace (first BSDF)")
+    f.add_argument("-o", "--output", metavar="OUT.exr", default="furnace.exr",
+                   help="furnace image (default: ./furnace.exr)")
+    f.add_argument("--spp", type=int, default=128, help="furnace spp (default 128)")
+    f.add_argument("--res", type=int, default=64, help="furnace resolution (default 64)")
+    f.set_defaults(func=cmd_furnace)
+
+    pl = sub.add_parser("plot", help="lobe, albedo or (θh, θd) slice plots (PNG)",
+                        description="Plots like Disney's BRDF Explorer: 'lobe' (polar, plane of "
+                                    "incidence, several incident angles), 'albedo' (E(θ)), "
+                                    "'slice' (f over θh, θd at φd = 90°). Several BSDFs share "
+                                    "one figure.")
+    pl.add_argument("kind", choices=["lobe", "albedo", "slice"])
+    pl.add_argument("bsdf", nargs="+", metavar="BSDF", help=bsdf_help)
+    _add_variant(pl)
+    pl.add_argument("-o", "--output", metavar="OUT.png", help="default: ./<kind>.png")
+    pl.add_argument("--thetas", metavar="DEG,...", help="incident angles (lobe, albedo)")
+    pl.add_argument("--log", action="store_true", help="logarithmic radius (lobe)")
+    pl.add_argument("--no-cos", action="store_true", help="plot f instead of f·cosθo (lobe)")
+    pl.add_argument("--res", type=int, default=128, help="slice resolution (default 128)")
+    pl.add_argument("-n", "--samples", type=int, metavar="N", help="samples per angle (albedo)")
+    pl.set_defaults(func=cmd_plot)
+
     i = sub.add_parser("info", help="versions, variants, LLVM status and registered plugins")
     i.set_defaults(func=cmd_info)
     return parser
+
+
+def _bsdfs(tokens):
+    from .bsdfspec import load_bsdf, parse_cli
+
+    specs = parse_cli(tokens)
+    for spec in specs:
+        load_bsdf(spec)  # reject bad parameters before any long work, in one line
+    return specs
+
+
+def _thetas(text):
+    from .errors import MiBrdfsError
+
+    if text is None:
+        return None
+    try:
+        values = [float(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise MiBrdfsError(f"--thetas expects degrees separated by commas, got '{text}'") from None
+    if not values or any(not 0 <= v <= 90 for v in values):
+        raise MiBrdfsError(f"--thetas: angles must lie in [0, 90] degrees, got '{text}'")
+    return values
+
+
+def cmd_check(args) -> int:
+    import json
+
+    import mi_brdfs
+    from .bsdfspec import describe
+    from .checks import format_table, run_battery
+
+    variant = mi_brdfs.use_variant(args.variant)
+    specs = _bsdfs(args.bsdf)
+    failed, report = 0, []
+    for spec in specs:
+        results = run_battery(spec, quick=args.quick, render=args.render,
+                              progress=not args.quiet)
+        failed += sum(not r.passed for r in results)
+        print(f"\n{describe(spec)} ({variant})")
+        print(format_table(results, messages=not args.quiet))
+        report.append({"bsdf": describe(spec), "variant": variant, "checks": [
+            {"name": r.name, "passed": r.passed, "value": r.value, "tolerance": str(r.tolerance),
+             "message": r.message} for r in results]})
+    if args.json:
+        from .imageio import atomic_path
+        with atomic_path(args.json, ".json") as tmp:
+            with open(tmp, "w") as f:
+                json.dump(report, f, indent=1, default=float)
+    print(f"\n{failed} check(s) failed" if failed else "\nall checks passed")
+    return 1 if failed else 0
+
+
+def cmd_furnace(args) -> int:
+    import mi_brdfs
+    from .bsdfspec import describe
+    from .checks.albedo import DEFAULT_THETAS, albedo_curve
+    from .checks.furnace import check_furnace
+    from .imageio import check_writable, write_exr, write_png
+
+    variant = mi_brdfs.use_variant(args.variant)
+    specs = _bsdfs(args.bsdf)
+    thetas = _thetas(args.thetas) or DEFAULT_THETAS
+    out = check_writable(args.output) if args.render else None
+    for spec in specs:
+        curve = albedo_curve(spec, thetas, n=args.samples)
+        print(f"\ndirectional albedo of {describe(spec)} ({variant}; brightest channel)")
+        print(curve.table())
+        for note in curve.notes:
+            print(f"note: {note}")
+    if args.render:
+        result = check_furnace(specs[0], spp=args.spp, res=args.res, n=args.samples)
+        r = result.details["render"]
+        meta = {"mi_brdfs.check": "white furnace", "furnace.bsdf": describe(specs[0]),
+                "furnace.mean": f"{r.mean:.6f}", "furnace.expected": str(r.expected),
+                "furnace.nonfinite": r.nonfinite, "render.variant": variant,
+                "render.spp": r.spp, "mi_brdfs.version": mi_brdfs.__version__}
+        write_exr(out, r.image, meta)
+        write_png(out.with_suffix(".png"), r.image)
+        print(f"\n{result.message}\nwrote {out} and {out.with_suffix('.png')}")
+        return 0 if result.passed else 1
+    return 0
+
+
+def cmd_plot(args) -> int:
+    import mi_brdfs
+    from . import plots
+    from .imageio import check_writable
+
+    mi_brdfs.use_variant(args.variant)
+    specs = _bsdfs(args.bsdf)
+    out = check_writable(args.output or f"{args.kind}.png")
+    thetas = _thetas(args.thetas)
+    if args.kind == "lobe":
+        plots.plot_lobe(specs, out, thetas or (0.0, 30.0, 60.0, 80.0), log=args.log,
+                        cosine=not args.no_cos)
+    elif args.kind == "albedo":
+        plots.plot_albedo(specs, out, thetas, n=args.samples)
+    else:
+        plots.plot_slice(specs, out, res=args.res)
+    print(f"wrote {out}")
+    return 0
 
 
 def cmd_render(args) -> int:

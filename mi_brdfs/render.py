@@ -212,7 +212,6 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
 
     slow_python = not jit and uses_python_plugins(scene)
     arrangement = "jit" if jit else "threads"
-    interrupted = False
     bar = Progress(spp, label=f"render {path.name}", unit=" spp") if progress else None
 
     def run_pass(index: int, k: int) -> None:

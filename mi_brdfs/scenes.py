@@ -78,10 +78,15 @@ def mitsuba_error_line(error: BaseException) -> str:
     return " ".join(lines)
 
 
-def load_scene(path: str | os.PathLike, defines: dict | None = None, **kwargs):
+def load_scene(path: str | os.PathLike, defines: dict | None = None, bsdfs: dict | None = None,
+               **kwargs):
     """
     Load a scene file (path or bundled name) with ``<default>`` overrides, raising MiBrdfsError
     with one line for a missing file, a parse error or a plugin that rejects its parameters.
+
+    Parameter ``bsdfs`` (dict | None): ``{id: BSDF}`` replaces the ``<bsdf id="...">`` elements
+    of the scene by these BSDFs (dicts, XML fragments or ``'type key=value'`` strings), e.g.
+    ``load_scene('furnace', bsdfs={'material': {'type': 'roughconductor', 'alpha': 0.3}})``.
     """
     import mitsuba as mi
 
@@ -89,7 +94,46 @@ def load_scene(path: str | os.PathLike, defines: dict | None = None, **kwargs):
     params = dict(defines or {})
     params.update({k: str(v) for k, v in kwargs.items()})
     try:
-        return mi.load_file(str(path), **params)
+        if not bsdfs:
+            return mi.load_file(str(path), **params)
+        xml = swap_bsdfs(path.read_text(), bsdfs)
+        # relative paths in the scene (textures, meshes) resolve against its folder, as in
+        # mi.load_file; the resolver is global, so it is restored afterwards
+        saved = mi.FileResolver(mi.file_resolver())
+        mi.file_resolver().prepend(str(path.parent))
+        try:
+            return mi.load_string(xml, **params)
+        finally:
+            mi.set_file_resolver(saved)
     except RuntimeError as e:
         line = mitsuba_error_line(e)
         raise MiBrdfsError(line if path.name in line else f"{path.name}: {line}") from None
+
+
+def swap_bsdfs(xml: str, bsdfs: dict) -> str:
+    """The scene XML text with each ``<bsdf id=...>`` of ``bsdfs`` replaced (see load_scene)."""
+    import xml.etree.ElementTree as ET
+
+    from .bsdfspec import parse_cli, to_xml
+
+    root = ET.fromstring(xml)
+    for bsdf_id, spec in bsdfs.items():
+        if isinstance(spec, str) and not spec.lstrip().startswith("<"):
+            import shlex
+            specs = parse_cli(shlex.split(spec))
+            if len(specs) != 1:
+                raise MiBrdfsError(f"'{spec}' names {len(specs)} BSDFs, not one")
+            spec = specs[0]
+        found = False
+        for parent in root.iter():
+            for i, child in enumerate(list(parent)):
+                if child.tag == "bsdf" and child.get("id") == bsdf_id:
+                    new = ET.fromstring(to_xml(spec, id=bsdf_id))
+                    parent.remove(child)
+                    parent.insert(i, new)
+                    found = True
+        if not found:
+            ids = sorted({e.get("id") for e in root.iter("bsdf") if e.get("id")})
+            raise MiBrdfsError(f"the scene has no <bsdf id=\"{bsdf_id}\"> "
+                               f"(its BSDF ids: {', '.join(ids) or 'none'})")
+    return ET.tostring(root, encoding="unicode")

@@ -1,42 +1,95 @@
 """
-Deliberately broken BSDFs, to show that each check can fail. Each is a Lambert with one
-defect; register them with :func:`register_broken` in the current variant.
+Deliberately broken BSDFs, to show that each check can fail: ``broken`` is a Lambert (ρ = 0.5)
+with exactly one defect, chosen by its ``defect`` property, so that each check is also shown to
+be specific (the other checks still pass on it where they should):
+
+=============  ==========================================================================
+``defect``     what is wrong
+=============  ==========================================================================
+``none``       nothing: a correct Lambert (control)
+``pdf``        samples the hemisphere uniformly but reports the cosine pdf (χ²)
+``weight``     the sample weight lacks the cosine: f/pdf instead of f·cosθo/pdf (consistency)
+``bspdf``      bs.pdf is twice pdf(bs.wo) (consistency)
+``energy``     f = 1.5/π: albedo 1.5 (energy)
+``reciprocal`` f = (2/π) ρ cosθi: depends on the incident side only (reciprocity)
+``nan``        eval and pdf are 0/0 = NaN for cosθo < 1e-3 (stability, positivity)
+``negative``   eval is negative for φo < 0 (positivity)
+=============  ==========================================================================
 """
 
 import drjit as dr
 import mitsuba as mi
 
+DEFECTS = ("none", "pdf", "weight", "bspdf", "energy", "reciprocal", "nan", "negative")
+
 
 def register_broken():
-    """Register the broken plugins in the current variant and return their ids."""
+    """Register ``broken`` in the current variant."""
 
-    class UniformSampledCosinePdf(mi.BSDF):
-        """Samples the hemisphere uniformly but reports the cosine pdf (χ² must reject it)."""
-
+    class Broken(mi.BSDF):
         def __init__(self, props):
             super().__init__(props)
+            self.defect = props.get("defect", "none")
+            assert self.defect in DEFECTS, self.defect
             self.m_flags = int(mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide)
             self.m_components = [self.m_flags]
 
+        def _f(self, wi, wo):
+            """f (without cosine) for directions above the surface."""
+            if self.defect == "energy":
+                return mi.Float(1.5 * dr.inv_pi)
+            if self.defect == "reciprocal":
+                return 2 * dr.inv_pi * 0.5 * wi.z
+            if self.defect == "negative":
+                return dr.select(wo.y < 0, -0.5 * dr.inv_pi, 0.5 * dr.inv_pi)
+            return mi.Float(0.5 * dr.inv_pi)
+
+        def _pdf(self, wo):
+            if self.defect == "pdf":
+                return mi.warp.square_to_cosine_hemisphere_pdf(wo)  # but samples uniformly
+            return mi.warp.square_to_cosine_hemisphere_pdf(wo)
+
+        def _eval_pdf(self, si, wo, active):
+            ok = active & (si.wi.z > 0) & (wo.z > 0)
+            value, pdf = self._f(si.wi, wo) * wo.z, self._pdf(wo)
+            if self.defect == "nan":
+                bad = wo.z < 1e-3
+                value = dr.select(bad, mi.Float(float("nan")), value)
+                pdf = dr.select(bad, mi.Float(float("nan")), pdf)
+                ok = ok | (active & (si.wi.z > 0) & bad & (wo.z >= 0))
+            return dr.select(ok, mi.Spectrum(value), 0.0), dr.select(ok, pdf, 0.0)
+
         def sample(self, ctx, si, sample1, sample2, active=True):
             bs = dr.zeros(mi.BSDFSample3f)
-            bs.wo = mi.warp.square_to_uniform_hemisphere(sample2)
-            bs.pdf = mi.warp.square_to_cosine_hemisphere_pdf(bs.wo)
+            if self.defect == "pdf":
+                bs.wo = mi.warp.square_to_uniform_hemisphere(sample2)
+            else:
+                bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
+            value, pdf = self._eval_pdf(si, bs.wo, active)
+            bs.pdf = 2 * pdf if self.defect == "bspdf" else pdf
             bs.eta = 1.0
             bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
-            ok = active & (si.wi.z > 0) & (bs.pdf > 0)
-            return bs, dr.select(ok, mi.Spectrum(0.5), mi.Spectrum(0.0))
+            ok = active & (si.wi.z > 0) & (pdf > 0)
+            weight = value / dr.select(ok, pdf, 1.0)
+            if self.defect == "weight":
+                weight = weight / dr.maximum(bs.wo.z, 1e-6)
+            return bs, dr.select(ok, weight, 0.0)
 
         def eval(self, ctx, si, wo, active=True):
-            ok = active & (si.wi.z > 0) & (wo.z > 0)
-            return dr.select(ok, mi.Spectrum(0.5 * dr.inv_pi) * wo.z, mi.Spectrum(0.0))
+            return self._eval_pdf(si, wo, active)[0]
 
         def pdf(self, ctx, si, wo, active=True):
-            ok = active & (si.wi.z > 0) & (wo.z > 0)
-            return dr.select(ok, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
+            return self._eval_pdf(si, wo, active)[1]
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self._eval_pdf(si, wo, active)
 
         def to_string(self):
-            return "UniformSampledCosinePdf[]"
+            return f"Broken[defect={self.defect}]"
 
-    mi.register_bsdf("broken_pdf", UniformSampledCosinePdf)
-    return ["broken_pdf"]
+    mi.register_bsdf("broken", Broken)
+    return "broken"
+
+
+def broken(defect):
+    return {"type": "broken", "defect": defect}

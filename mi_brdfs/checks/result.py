@@ -21,6 +21,8 @@ class CheckResult:
     tolerance: float | str
     message: str
     details: dict = field(default_factory=dict)
+    #: The check did not apply (e.g. χ² in a scalar variant, or on Dirac lobes): passed, not run.
+    skipped: bool = False
 
     def __bool__(self) -> bool:
         return self.passed

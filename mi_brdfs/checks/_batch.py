@@ -1,0 +1,152 @@
+"""
+Calling a BSDF on many directions, in any variant, with NumPy arrays in and out.
+
+JIT variants take all directions in one vectorised call; scalar variants call the BSDF once per
+direction (keep ``n`` small there). Spectral variants get the fixed :data:`WAVELENGTHS`. Every
+array that comes back has one row per direction: values ``(n, channels)``, pdfs ``(n,)``,
+directions ``(n, 3)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..reference.quadrature import direction  # noqa: F401  (re-exported for the checks)
+
+#: Wavelengths (nm) given to spectral variants, where a BSDF may depend on them.
+WAVELENGTHS = (450.0, 500.0, 550.0, 600.0)
+
+
+def is_jit() -> bool:
+    return bool(dr.is_jit_v(mi.Float))
+
+
+def random_directions(rng: np.random.Generator, n: int, sphere: bool = True) -> np.ndarray:
+    """``n`` unit vectors, uniform on the sphere (or the upper hemisphere), as (n, 3) float64."""
+    v = rng.normal(size=(n, 3))
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    if not sphere:
+        v[:, 2] = np.abs(v[:, 2])
+    return v
+
+
+
+
+def _rows(a, n: int) -> np.ndarray:
+    a = np.asarray(a, dtype=np.float64)
+    return np.broadcast_to(a, (n, 3)) if a.ndim == 1 else a
+
+
+def _vector(a: np.ndarray):
+    a = np.asarray(a, dtype=np.float32)
+    return mi.Vector3f(mi.Float(a[:, 0]), mi.Float(a[:, 1]), mi.Float(a[:, 2]))
+
+
+def interaction(wi, n: int | None = None, uv=(0.5, 0.5)):
+    """
+    Surface interaction(s) whose shading frame is the local frame, with ``si.wi`` = ``wi``.
+
+    JIT: ``n`` lanes from ``wi`` of shape (n, 3), or one direction (3,) repeated ``n`` times.
+    Scalar: ``wi`` must be one direction.
+    """
+    si = dr.zeros(mi.SurfaceInteraction3f, n or 1) if is_jit() else mi.SurfaceInteraction3f()
+    if is_jit():
+        si.wi = _vector(_rows(wi, n or len(wi)))
+    else:
+        si.wi = mi.Vector3f(*[float(x) for x in np.ravel(wi)[:3]])
+    si.uv = mi.Point2f(*uv)
+    si.n = mi.Vector3f(0, 0, 1)
+    si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+    if mi.is_spectral:
+        si.wavelengths = mi.Spectrum(WAVELENGTHS) if not is_jit() else \
+            dr.zeros(mi.Spectrum, n or 1) + mi.Spectrum(WAVELENGTHS)
+    return si
+
+
+def _channels(x, spectrum: bool = True) -> np.ndarray:
+    """A drjit spectrum or vector (channels × n in JIT, channels in scalar) → (n, channels)."""
+    if spectrum:
+        x = mi.unpolarized_spectrum(x)  # the identity outside polarized variants
+    a = np.array(x, dtype=np.float64)
+    if not is_jit():
+        return a.reshape(1, -1)
+    return a[:, None] if a.ndim == 1 else a.T
+
+
+def _lanes(x, n: int, dtype=np.float64) -> np.ndarray:
+    """Per-lane values, broadcast to ``n`` rows: a BSDF may return a width-1 constant."""
+    a = np.asarray(x, dtype=dtype)
+    if a.ndim <= 1:
+        a = a.ravel()
+        return np.broadcast_to(a, (n,)).copy() if a.size == 1 else a
+    return np.broadcast_to(a, (n, a.shape[1])).copy() if a.shape[0] == 1 else a
+
+
+@dataclass
+class Evaluation:
+    """``eval`` (f·cosθo), ``pdf``, and ``eval_pdf``'s two values, one row per direction pair."""
+
+    value: np.ndarray
+    pdf: np.ndarray
+    eval_pdf_value: np.ndarray
+    eval_pdf_pdf: np.ndarray
+
+
+@dataclass
+class Samples:
+    """What ``sample()`` returned, one row per sample."""
+
+    wo: np.ndarray
+    pdf: np.ndarray
+    weight: np.ndarray
+    sampled_type: np.ndarray
+    sampled_component: np.ndarray
+
+
+def evaluate(bsdf, wi, wo, ctx=None) -> Evaluation:
+    """``eval``, ``pdf`` and ``eval_pdf`` at the pairs (wi, wo); wi may be one direction."""
+    ctx = ctx or mi.BSDFContext()
+    wo = np.atleast_2d(np.asarray(wo, dtype=np.float64))
+    n = len(wo)
+    if is_jit():
+        si, w = interaction(wi, n), _vector(wo)
+        value, pdf = bsdf.eval(ctx, si, w), bsdf.pdf(ctx, si, w)
+        value2, pdf2 = bsdf.eval_pdf(ctx, si, w)
+        return Evaluation(_lanes(_channels(value), n), _lanes(pdf, n),
+                          _lanes(_channels(value2), n), _lanes(pdf2, n))
+    wi = _rows(wi, n)
+    rows = []
+    for a, b in zip(wi, wo):
+        si, w = interaction(a), mi.Vector3f(*map(float, b))
+        value2, pdf2 = bsdf.eval_pdf(ctx, si, w)
+        rows.append((_channels(bsdf.eval(ctx, si, w))[0], float(bsdf.pdf(ctx, si, w)),
+                     _channels(value2)[0], float(pdf2)))
+    value, pdf, value2, pdf2 = zip(*rows)
+    return Evaluation(np.array(value), np.array(pdf), np.array(value2), np.array(pdf2))
+
+
+def sample(bsdf, wi, sample1, sample2, ctx=None) -> Samples:
+    """``sample()`` with the given random numbers: ``sample1`` (n,), ``sample2`` (n, 2)."""
+    ctx = ctx or mi.BSDFContext()
+    sample1 = np.asarray(sample1, dtype=np.float32)
+    sample2 = np.atleast_2d(np.asarray(sample2, dtype=np.float32))
+    n = len(sample1)
+    if is_jit():
+        si = interaction(wi, n)
+        u = mi.Point2f(mi.Float(sample2[:, 0]), mi.Float(sample2[:, 1]))
+        bs, weight = bsdf.sample(ctx, si, mi.Float(sample1), u)
+        return Samples(_lanes(_channels(bs.wo, False), n), _lanes(bs.pdf, n),
+                       _lanes(_channels(weight), n), _lanes(bs.sampled_type, n, np.int64),
+                       _lanes(bs.sampled_component, n, np.int64))
+    wi = _rows(wi, n)
+    rows = []
+    for a, u1, u2 in zip(wi, sample1, sample2):
+        bs, weight = bsdf.sample(ctx, interaction(a), float(u1), mi.Point2f(*map(float, u2)))
+        rows.append((np.array(bs.wo, dtype=np.float64), float(bs.pdf), _channels(weight)[0],
+                     int(bs.sampled_type), int(bs.sampled_component)))
+    wo, pdf, weight, kind, comp = zip(*rows)
+    return Samples(np.array(wo), np.array(pdf), np.array(weight), np.array(kind), np.array(comp))

@@ -1,0 +1,50 @@
+"""
+Float64 NumPy reference implementations of the package's models: the oracle for the tests and
+the validation campaign, written independently of the plugins (no drjit, no Mitsuba).
+
+Each model is a small class with ``brdf(wi, wo)`` → f (without the cosine), arrays of shape
+(n, channels), directions as (n, 3) unit vectors in the local frame (normal = +z, ``wi`` towards
+the light or viewer, as in Mitsuba), and ``albedo(theta)`` → E(θ) per channel, by a closed form
+where one exists, else by quadrature. :func:`for_spec` maps a BSDF specification (a
+``load_dict`` dict, for our plugins and their built-in counterparts) to its reference.
+"""
+
+from __future__ import annotations
+
+import mitsuba as mi
+import numpy as np
+
+from .lambert import Lambert
+from .quadrature import hemisphere_albedo
+
+__all__ = ["for_spec", "color", "Lambert", "hemisphere_albedo"]
+
+
+def color(value, default=None) -> np.ndarray | None:
+    """
+    A parameter value of a BSDF dict as per-channel float64, or None when the reference cannot
+    know it in this variant (an RGB colour is upsampled to a spectrum in spectral variants; a
+    texture varies over the surface).
+    """
+    if value is None:
+        value = default
+    if isinstance(value, (int, float)):
+        return np.array([float(value)])
+    if isinstance(value, dict) and value.get("type") == "rgb" and not mi.is_spectral \
+            and not mi.is_monochromatic:
+        return np.asarray(value["value"], dtype=np.float64).reshape(-1)
+    if isinstance(value, dict) and value.get("type") == "spectrum" and \
+            isinstance(value.get("value"), (int, float)):
+        return np.array([float(value["value"])])
+    return None
+
+
+def for_spec(spec):
+    """The float64 reference of a BSDF dict, or None where the package has none."""
+    if not isinstance(spec, dict):
+        return None
+    kind = spec.get("type")
+    if kind in ("lambert", "diffuse"):
+        rho = color(spec.get("reflectance"), 0.5)
+        return None if rho is None else Lambert(rho)
+    return None

@@ -1,0 +1,49 @@
+"""
+Float64 quadrature over the (hemi)sphere, shared by the reference models and the checks:
+Gauss-Legendre in μ = cosθ (exact for polynomials of degree < 2n in μ) and the midpoint rule in
+φ (exact for trigonometric polynomials of degree < n_φ, so spectrally accurate for the periodic
+φ-dependence of a BRDF).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def direction(theta: float, phi: float = 0.0) -> np.ndarray:
+    """The unit vector at polar angle ``theta`` and azimuth ``phi`` (radians)."""
+    return np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi),
+                     math.cos(theta)])
+
+
+def sphere_grid(n_mu: int, n_phi: int, mu_range=(0.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Nodes and weights for ∫ g(ω) dω over the part of the sphere with μ = cosθ in ``mu_range``.
+
+    Returns → (directions (n_mu·n_phi, 3), weights (n_mu·n_phi,)), μ varying slowest.
+    """
+    x, w = np.polynomial.legendre.leggauss(n_mu)
+    a, b = mu_range
+    mu, w_mu = 0.5 * (b - a) * x + 0.5 * (b + a), 0.5 * (b - a) * w
+    phi = (np.arange(n_phi) + 0.5) * (2 * math.pi / n_phi)
+    M, P = np.meshgrid(mu, phi, indexing="ij")
+    s = np.sqrt(np.maximum(1 - M * M, 0.0))
+    v = np.stack([s * np.cos(P), s * np.sin(P), M], axis=-1).reshape(-1, 3)
+    weights = np.repeat(w_mu, n_phi) * (2 * math.pi / n_phi)
+    return v, weights
+
+
+def hemisphere_albedo(brdf, theta: float, n_mu: int = 512, n_phi: int = 512,
+                      mu_range=(0.0, 1.0)) -> np.ndarray:
+    """
+    E(θ) = ∫ f(wi, wo) cosθo dωo over the upper hemisphere, for ``wi`` at polar angle ``theta``
+    in the xz plane.
+
+    Parameter ``brdf`` (callable): ``brdf(wi (n, 3), wo (n, 3))`` → f, shape (n, channels).
+    """
+    wo, weights = sphere_grid(n_mu, n_phi, mu_range)
+    wi = np.broadcast_to(direction(theta), wo.shape)
+    f = np.asarray(brdf(wi, wo), dtype=np.float64).reshape(len(wo), -1)
+    return np.einsum("n,nc->c", weights * wo[:, 2], f)

@@ -1,0 +1,239 @@
+"""
+The validation toolkit: every check accepts correct BSDFs (Mitsuba's diffuse and roughconductor,
+our lambert, the defect-free control) and rejects the BSDF with the defect it is there to find.
+Sample counts are small: the big numbers belong to the validation campaign.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from broken import broken, register_broken
+from mi_brdfs import checks, testing
+from mi_brdfs.errors import MiBrdfsError
+
+GOOD = {
+    "diffuse": {"type": "diffuse"},
+    "roughconductor": {"type": "roughconductor", "alpha": 0.3},
+    "lambert": {"type": "lambert", "reflectance": 0.8},
+    "control": broken("none"),
+}
+
+
+@pytest.fixture
+def jit(variant_llvm_ad_rgb):
+    register_broken()
+
+
+@pytest.fixture(params=["scalar_rgb", "llvm_ad_rgb"])
+def any_variant(request):
+    from conftest import set_variant
+    set_variant(request.param)
+    register_broken()
+    return request.param
+
+
+# -- χ² ---------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", GOOD)
+def test01_chi2_accepts(jit, name):
+    result = checks.chi2_bsdf(GOOD[name], wi=[0.5, 0.2, 0.84], sample_count=200_000)
+    assert result.passed, result.message
+
+
+def test02_chi2_rejects_wrong_pdf(jit):
+    result = checks.chi2_bsdf(broken("pdf"), sample_count=200_000)
+    assert not result.passed and result.value < 1e-6 and "rejected" in result.message
+
+
+def test03_chi2_needs_jit(variant_scalar_rgb):
+    with pytest.raises(MiBrdfsError, match="needs a JIT variant"):
+        checks.chi2_bsdf({"type": "lambert"})
+
+
+def test04_chi2_resolution_follows_the_lobe(jit):
+    assert checks.sampling.chi2_settings(checks.sampling.load_bsdf("diffuse"), [0, 0, 1])[:2] \
+        == (101, 8)
+    sharp = checks.sampling.load_bsdf({"type": "roughconductor", "alpha": 0.05,
+                                       "distribution": "ggx"})
+    assert checks.sampling.chi2_settings(sharp, [0, 0, 1])[0] >= 201
+
+
+# -- consistency --------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", GOOD)
+def test05_consistency_accepts(any_variant, name):
+    result = checks.check_consistency(GOOD[name], n=20_000 if "llvm" in any_variant else 200)
+    assert result.passed, result.message
+
+
+@pytest.mark.parametrize("defect,what", [("weight", "weight vs eval/pdf"),
+                                         ("bspdf", "bs.pdf vs pdf(bs.wo)")])
+def test06_consistency_rejects(any_variant, defect, what):
+    result = checks.check_consistency(broken(defect), n=20_000 if "llvm" in any_variant else 200)
+    assert not result.passed and what in result.message
+
+
+# -- energy and albedo -----------------------------------------------------------------------------
+
+THETAS = (0.0, 45.0, 80.0)
+
+
+@pytest.mark.parametrize("name", GOOD)
+def test07_energy_accepts(jit, name):
+    result = checks.check_energy(GOOD[name], THETAS, n=100_000)
+    assert result.passed, result.message
+
+
+def test08_energy_rejects_energy_gain(any_variant):
+    result = checks.check_energy(broken("energy"), THETAS, n=2_000)
+    assert not result.passed and result.value == pytest.approx(1.5, rel=1e-3)
+    assert "creates energy" in result.message
+
+
+@pytest.mark.parametrize("name", GOOD)
+def test09_albedo_agreement_accepts(jit, name):
+    result = checks.check_albedo_agreement(GOOD[name], THETAS, n=100_000)
+    assert result.passed, result.message
+
+
+def test10_albedo_agreement_rejects_weight_without_cosine(jit):
+    result = checks.check_albedo_agreement(broken("weight"), THETAS, n=100_000)
+    assert not result.passed, result.message
+
+
+def test11_albedo_estimators_agree_with_closed_form(jit):
+    """Lambert ρ = 0.8: every estimator gives 0.8 (the reference is the closed form)."""
+    curve = checks.albedo_curve(GOOD["lambert"], THETAS, n=100_000)
+    for estimate in (curve.sampled, curve.eval, curve.quadrature, curve.reference):
+        np.testing.assert_allclose(estimate, 0.8, rtol=2e-2)
+    np.testing.assert_allclose(curve.sampled, 0.8, rtol=1e-6)  # weight = ρ exactly
+    np.testing.assert_allclose(curve.quadrature, 0.8, rtol=1e-5)
+    assert curve.quadrature_resolved.all()
+
+
+# -- reciprocity, positivity, stability ---------------------------------------------------------
+
+@pytest.mark.parametrize("name", GOOD)
+def test12_reciprocity_and_positivity_accept(any_variant, name):
+    for check in (checks.check_reciprocity, checks.check_positivity):
+        result = check(GOOD[name])
+        assert result.passed, result.message
+
+
+def test13_reciprocity_rejects_one_sided_dependence(any_variant):
+    result = checks.check_reciprocity(broken("reciprocal"))
+    assert not result.passed and result.value > 0.1 and "f(a,b) =" in result.message
+
+
+@pytest.mark.parametrize("defect", ["negative", "nan"])
+def test14_positivity_rejects(any_variant, defect):
+    result = checks.check_positivity(broken(defect))
+    assert not result.passed and result.details["negative" if defect == "negative" else "nonfinite"]
+
+
+@pytest.mark.parametrize("name", GOOD)
+def test15_stability_accepts(any_variant, name):
+    result = checks.check_stability(GOOD[name])
+    assert result.passed, result.message
+
+
+def test16_stability_rejects_nan_at_grazing(any_variant):
+    result = checks.check_stability(broken("nan"))
+    assert not result.passed and "NaN eval" in result.message and "wo tangent" in result.message
+
+
+def test17_stability_grid_and_rejected_parameters(variant_scalar_rgb):
+    grid = checks.parameter_grid({"type": "lambert"}, reflectance=[0.0, 1.0, 1.5])
+    result = checks.check_stability(grid, n_random=50)
+    assert result.passed and "1 parameter set(s) rejected" in result.message
+    assert [bool(r.rejected) for r in result.details["rows"]] == [False, False, True]
+
+
+# -- furnace render -----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("spec", [{"type": "lambert", "reflectance": 1.0}, GOOD["roughconductor"]],
+                         ids=["lambert", "roughconductor"])
+def test18_furnace_accepts(jit, spec):
+    result = checks.check_furnace(spec, spp=64, res=32, n=100_000)
+    assert result.passed, result.message
+    assert result.details["render"].nonfinite == 0
+
+
+@pytest.mark.parametrize("defect", ["nan", "weight"])
+def test19_furnace_rejects(jit, defect):
+    result = checks.check_furnace(broken(defect), spp=64, res=32, n=100_000)
+    assert not result.passed, result.message
+
+
+def test20_furnace_prediction_geometry():
+    """The analytic ray cast: background is 1, the sphere's centre faces the camera."""
+    cos = checks.furnace.view_cosines(32)
+    assert np.isnan(cos[0, 0]).all() and np.nanmax(cos) > 0.999
+    image = checks.furnace.expected_image([0, 90], [0.5, 0.5], 32)
+    hit = ~np.isnan(cos).all(axis=2)
+    assert image[~hit].min() == 1.0 and image[16, 16] == pytest.approx(0.5)
+
+
+# -- microfacet terms ---------------------------------------------------------------------------
+
+def _beckmann_exact(alpha):
+    """Beckmann D and the exact (erf) Smith G1, float64: the weak furnace must give 1."""
+    from math import erf, sqrt, pi
+
+    def D(m):
+        c2 = m[:, 2] ** 2
+        t2 = np.where(c2 > 0, (1 - c2) / np.maximum(c2, 1e-300), np.inf)
+        return np.where(m[:, 2] > 0, np.exp(-t2 / alpha**2) / (pi * alpha**2 * c2**2 + 1e-300), 0)
+
+    def G1(v, m):
+        cos = v[:, 2]
+        a = cos / (alpha * np.sqrt(np.maximum(1 - cos**2, 1e-300)))
+        lam = (np.vectorize(erf)(a) - 1) / 2 + np.exp(-a * a) / (2 * a * sqrt(pi))
+        return np.where(np.sum(v * m, axis=1) > 0, 1 / (1 + lam), 0)
+    return D, G1
+
+
+def test21_microfacet_terms_accept_consistent_pairs(jit):
+    D, G1 = checks.mitsuba_terms("ggx", 0.5)
+    assert testing.assert_ndf_normalized(D, 0.5).passed
+    assert testing.assert_weak_furnace(D, G1, 0.5).passed
+    D, G1 = _beckmann_exact(0.5)
+    result = checks.check_weak_furnace(D, G1, 0.5, "Beckmann, exact Smith G1", tol=1e-4)
+    assert result.passed, result.message
+
+
+def test22_microfacet_terms_reject(jit):
+    D, G1 = checks.mitsuba_terms("ggx", 0.5)
+    assert not checks.check_ndf(lambda m: D(m) * math.pi, 0.5, "D without 1/π").passed
+    assert not checks.check_weak_furnace(D, lambda v, m: np.ones(len(v)), 0.5, "G1 = 1").passed
+    # and it is sharp enough to see Mitsuba's rational Beckmann G1 (< 0.35 % error, Walter 2007)
+    D, G1 = checks.mitsuba_terms("beckmann", 0.5)
+    result = checks.check_weak_furnace(D, G1, 0.5, "Mitsuba Beckmann")
+    assert not result.passed and 1e-3 < abs(result.value - 1) < 4e-3
+
+
+# -- battery and pytest helpers -----------------------------------------------------------------
+
+def test23_battery_on_builtin(jit):
+    results = checks.run_battery("roughconductor alpha=0.3", quick=True, progress=False)
+    names = [r.name for r in results]
+    assert names[:4] == ["consistency", "chi2 θ=0°", "chi2 θ=45°", "chi2 θ=84.26°"]
+    assert all(r.passed for r in results), checks.format_table(results)
+    table = checks.format_table(results)
+    assert "check" in table.splitlines()[0] and "FAIL" not in table
+
+
+def test24_battery_flags_the_broken(jit):
+    results = {r.name: r for r in checks.run_battery(broken("energy"), quick=True,
+                                                     progress=False)}
+    assert not results["energy"].passed and results["consistency"].passed
+
+
+def test25_pytest_helpers_raise_with_the_message(any_variant):
+    testing.assert_consistent(GOOD["lambert"], n=100)
+    with pytest.raises(AssertionError, match=r"reciprocity: broken\(defect=reciprocal\)"):
+        testing.assert_reciprocal(broken("reciprocal"))
+    with pytest.raises(AssertionError, match="creates energy"):
+        testing.assert_energy_conserving(broken("energy"), thetas_deg=(0.0,), n=500)
