@@ -125,37 +125,113 @@ def texture_range(tex) -> tuple[float, float] | None:
     return None
 
 
-def reflectance(props, plugin: str, name: str, default: float):
-    """
-    A reflectance in [0, 1]: a float, ``<rgb>``, ``<spectrum>`` or any texture.
+def _range_text(lo: float, hi: float, lo_open: bool) -> str:
+    if math.isinf(hi):
+        return f"must be finite and {'>' if lo_open else '≥'} {lo:g}"
+    return f"must be finite and within {'(' if lo_open else '['}{lo:g}, {hi:g}]"
 
-    Returns → mi.Texture. Raises ParameterError for values outside [0, 1] or not finite, and for
-    properties that are not colours at all.
+
+def _in_range(x: float, lo: float, hi: float, lo_open: bool) -> bool:
+    return math.isfinite(x) and (x > lo if lo_open else x >= lo) and x <= hi
+
+
+def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: float = 1.0,
+            lo_open: bool = False):
+    """
+    A spectrally or spatially varying parameter: a float, ``<rgb>``, ``<spectrum>`` or any
+    texture, with every value finite and within [``lo``, ``hi``] (``(lo, hi]`` with ``lo_open``).
+
+    Values bounded by 1 are read with ``get_texture`` (reflectances, which Mitsuba upsamples as
+    such); others with ``get_unbounded_texture`` (η, k, α), which accepts RGB values above 1.
+
+    Returns → mi.Texture. Raises ParameterError for values out of range or not finite, and for
+    properties that are neither numbers nor colours nor textures.
     """
     T = _types()
-    allowed = "must be finite and within [0, 1]"
+    allowed = _range_text(lo, hi, lo_open)
+    getter = props.get_texture if hi <= 1.0 else props.get_unbounded_texture
     if name in props:
         kind = props.type(name)
         if kind in (T.Float, T.Integer):
             value = float(props[name])
-            if not _finite_in(value, 0.0, 1.0):
+            if not _in_range(value, lo, hi, lo_open):
                 raise ParameterError(plugin, name, value, allowed)
         elif kind == T.Color:
             # Checked here, before Mitsuba's own check, so the message names plugin and parameter.
             value = [float(c) for c in props[name]]
-            if not all(_finite_in(c, 0.0, 1.0) for c in value):
+            if not all(_in_range(c, lo, hi, lo_open) for c in value):
                 raise ParameterError(plugin, name, value, allowed + " in every channel")
         elif kind in (T.Spectrum, T.Object):
-            tex = props.get_texture(name, default)
+            tex = getter(name, default)
             rng = texture_range(tex)
-            if rng is not None and not (_finite_in(rng[0], 0, 1) and _finite_in(rng[1], 0, 1)):
+            if rng is not None and not (_in_range(rng[0], lo, hi, lo_open)
+                                        and _in_range(rng[1], lo, hi, lo_open)):
                 shown = f"a texture with values in [{rng[0]:g}, {rng[1]:g}]"
                 raise ParameterError(plugin, name, shown, allowed)
             return tex
         else:
             raise ParameterError(plugin, name, props[name],
                                  "must be a float, <rgb>, <spectrum> or a texture")
-    return props.get_texture(name, default)
+    return getter(name, default)
+
+
+def reflectance(props, plugin: str, name: str, default: float):
+    """A reflectance: :func:`texture` with values in [0, 1]."""
+    return texture(props, plugin, name, default, 0.0, 1.0)
+
+
+def number(props, plugin: str, name: str, default: float, lo: float = -math.inf,
+           hi: float = math.inf, lo_open: bool = False) -> float:
+    """A plain number (not a texture), finite and within [``lo``, ``hi``]."""
+    if name not in props:
+        return float(default)
+    T = _types()
+    if props.type(name) not in (T.Float, T.Integer):
+        raise ParameterError(plugin, name, props[name], "must be a number")
+    value = float(props[name])
+    if not _in_range(value, lo, hi, lo_open):
+        raise ParameterError(plugin, name, value, _range_text(lo, hi, lo_open))
+    return value
+
+
+def choice(props, plugin: str, name: str, default: str, choices) -> str:
+    """A string among ``choices`` (case-sensitive, as Mitsuba's own options)."""
+    if name not in props:
+        return default
+    value = props[name]
+    if not isinstance(value, str) or value not in choices:
+        raise ParameterError(plugin, name, value,
+                             "must be one of " + ", ".join(f'"{c}"' for c in choices))
+    return value
+
+
+def boolean(props, plugin: str, name: str, default: bool) -> bool:
+    if name not in props:
+        return default
+    value = props[name]
+    if not isinstance(value, bool):
+        raise ParameterError(plugin, name, value, "must be a boolean (true or false)")
+    return value
+
+
+def reject(props, plugin: str, name: str, hint: str) -> None:
+    """Refuse a property the plugin deliberately does not take, saying what to do instead."""
+    if name in props:
+        raise ParameterError(plugin, name, props[name], hint)
+
+
+def is_zero(tex) -> bool:
+    """Whether a texture is the constant 0 (so the lobe it scales can be left out entirely)."""
+    rng = texture_range(tex)
+    return rng is not None and not tex.is_spatially_varying() and rng[0] == 0.0 == rng[1]
+
+
+def warn(plugin: str, message: str) -> None:
+    """A one-line warning from a plugin (values kept), shown by the CLI as such."""
+    import warnings
+
+    from ..errors import MiBrdfsWarning
+    warnings.warn(f"{plugin}: {message}", MiBrdfsWarning, stacklevel=3)
 
 
 def indent(obj, amount: int = 2) -> str:
