@@ -112,6 +112,25 @@ def _parser() -> argparse.ArgumentParser:
     pl.add_argument("-n", "--samples", type=int, metavar="N", help="samples per angle (albedo)")
     pl.set_defaults(func=cmd_plot)
 
+    cp = sub.add_parser("compare", help="A | B | difference | FLIP of two renders + noise floor",
+                        description="Render two scenes (or one scene and the same scene with a "
+                                    "material swapped) with the same spp and seed, and write one "
+                                    "figure A | B | signed difference | FLIP error map plus the "
+                                    "EXRs, with RMSE, relative MSE, mean FLIP and the noise floor "
+                                    "(the same numbers between two seeds of A).")
+    cp.add_argument("scenes", nargs="+", metavar="SCENE", help="A.xml [B.xml] (or bundled names)")
+    cp.add_argument("--swap", action="append", default=[], metavar="ID=BSDF",
+                    help="B = A with <bsdf id=ID> replaced, e.g. "
+                         "--swap \"material=roughconductor alpha=0.3\" (repeatable)")
+    _add_variant(cp)
+    cp.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
+    cp.add_argument("--seed", type=int, default=0)
+    cp.add_argument("-D", dest="defines", action="append", default=[], metavar="name=value",
+                    help="override a <default> of the scene(s) (repeatable)")
+    cp.add_argument("-o", "--output", metavar="OUT.png", default="compare.png",
+                    help="figure (default ./compare.png); EXRs beside it")
+    cp.set_defaults(func=cmd_compare)
+
     i = sub.add_parser("info", help="versions, variants, LLVM status and registered plugins")
     i.set_defaults(func=cmd_info)
     return parser
@@ -252,6 +271,32 @@ def cmd_render(args) -> int:
     print(f"{state} {result.spp} spp of {w}×{h} in {result.wall_time:.2f} s "
           f"({variant}, {result.arrangement}); wrote {' and '.join(written)}")
     return EXIT_INTERRUPTED if result.interrupted else 0
+
+
+def cmd_compare(args) -> int:
+    import mi_brdfs
+    from .compare import compare, parse_swaps, write_outputs
+    from .errors import MiBrdfsError
+    from .imageio import check_writable
+    from .scenes import parse_defines, scene_path
+
+    if len(args.scenes) > 2 or (len(args.scenes) == 1 and not args.swap):
+        raise MiBrdfsError("compare takes A.xml B.xml, or one scene with --swap ID=BSDF")
+    if args.spp < 1:
+        raise MiBrdfsError(f"--spp must be at least 1, got {args.spp}")
+    paths = [scene_path(s) for s in args.scenes]
+    out = check_writable(args.output)
+    swaps = parse_swaps(args.swap)
+    defines = parse_defines(args.defines)
+    mi_brdfs.use_variant(args.variant)
+    result = compare(paths[0], paths[1] if len(paths) > 1 else None, swap=swaps or None,
+                     spp=args.spp, seed=args.seed, defines=defines)
+    written = write_outputs(result, out)
+    print(result.summary())
+    for note in result.notes:
+        print(f"note: {note}")
+    print("wrote " + ", ".join(written))
+    return 0
 
 
 def cmd_info(args) -> int:
