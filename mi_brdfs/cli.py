@@ -199,7 +199,7 @@ def cmd_furnace(args) -> int:
     thetas = _thetas(args.thetas) or DEFAULT_THETAS
     out = check_writable(args.output) if args.render else None
     for spec in specs:
-        curve = albedo_curve(spec, thetas, n=args.samples)
+        curve = albedo_curve(spec, thetas, n=args.samples, progress=True)
         print(f"\ndirectional albedo of {describe(spec)} ({variant}; brightest channel)")
         print(curve.table())
         for note in curve.notes:

@@ -98,7 +98,7 @@ def plot_albedo(specs, path, thetas_deg=None, n: int | None = None, curves=None)
     plt = _pyplot()
     thetas = thetas_deg if thetas_deg is not None else \
         np.degrees(np.arccos(np.linspace(1.0, 0.02, 25)))
-    curves = curves or [albedo_curve(spec, thetas, n=n) for spec in specs]
+    curves = curves or [albedo_curve(spec, thetas, n=n, progress=True) for spec in specs]
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     for curve in curves:
         y, err = curve.sampled.mean(axis=1), curve.sampled_err.mean(axis=1)

@@ -170,41 +170,58 @@ class AlbedoCurve:
 
 
 def albedo_curve(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, seed: int = 0,
-                 estimators=("eval", "quadrature", "reference"), ctx=None) -> AlbedoCurve:
+                 estimators=("eval", "quadrature", "reference"), ctx=None,
+                 progress: bool = False) -> AlbedoCurve:
     """
     E(θ) at each incident angle (degrees) by the sampled estimator and the ``estimators`` asked
-    for. The quadrature runs at 128² and 256² nodes; where the two differ by more than 1e-3 the
-    lobe is too sharp for it and the value is marked unresolved.
+    for. The quadrature runs at 128² and 256² nodes; where the two differ by more than 1e-3, or
+    its grid is coarser than a quarter of the lobe's width, it is marked unresolved.
     """
     from .. import reference as ref
+    from ..progress import Progress
 
     bsdf = load_bsdf(spec)
     thetas = np.asarray(thetas_deg, dtype=np.float64)
-    rad = np.radians(thetas)
-    sampled = [_sampled(bsdf, t, _default_n(n), seed + i, ctx) for i, t in enumerate(rad)]
-    curve = AlbedoCurve(spec, thetas, np.array([m for m, _, _ in sampled]),
-                        np.array([e for _, e, _ in sampled]))
-    pdf_max = np.array([p for _, _, p in sampled])
     delta_only = not (_flags(bsdf) & int(mi.BSDFFlags.Smooth))
+    do_eval = "eval" in estimators and not delta_only
+    do_quad = "quadrature" in estimators and not delta_only and _batch.is_jit()
+    model = ref.for_spec(spec) if "reference" in estimators and ctx is None else None
+    rows = []
+    bar = Progress(len(thetas), label=f"albedo {describe(spec)}", unit=" angles") \
+        if progress else None
+    for i, t in enumerate(np.radians(thetas)):
+        row = dict(zip(("sampled", "sampled_err", "pdf_max"),
+                       _sampled(bsdf, t, _default_n(n), seed + i, ctx)))
+        if do_eval:
+            row["eval"], row["eval_err"] = albedo_eval(bsdf, t, n, seed + 1000 + i, "cosine", ctx)
+        if do_quad:
+            coarse = albedo_quadrature(bsdf, t, 128, 128, ctx)
+            row["quadrature"] = albedo_quadrature(bsdf, t, 256, 256, ctx)
+            # Resolved where the two grids agree and the grid spacing (2π/256 in φ) is below a
+            # quarter of the lobe's width, estimated from the sampler's largest pdf as
+            # 1/sqrt(pdf): two grids that both miss a sharp lobe agree on 0.
+            width = 1.0 / math.sqrt(max(row["pdf_max"], 1e-12))
+            row["resolved"] = bool(np.all(np.abs(row["quadrature"] - coarse) <= 1e-3)
+                                   and 2 * math.pi / 256 < width / 4)
+        if model is not None:
+            row["reference"] = model.albedo(t)
+        rows.append(row)
+        if bar:
+            bar.update(i + 1)
+    if bar:
+        bar.close()
+
+    def column(key):
+        return np.array([r[key] for r in rows])
+    curve = AlbedoCurve(spec, thetas, column("sampled"), column("sampled_err"))
     if delta_only:
         curve.notes.append("delta lobes only: eval() is 0, so only sample() sees them")
-    if "eval" in estimators and not delta_only:
-        ev = [albedo_eval(bsdf, t, n, seed + 1000 + i, "cosine", ctx) for i, t in enumerate(rad)]
-        curve.eval, curve.eval_err = np.array([m for m, _ in ev]), np.array([e for _, e in ev])
-    if "quadrature" in estimators and not delta_only and _batch.is_jit():
-        coarse = np.array([albedo_quadrature(bsdf, t, 128, 128, ctx) for t in rad])
-        fine = np.array([albedo_quadrature(bsdf, t, 256, 256, ctx) for t in rad])
-        curve.quadrature = fine
-        # Resolved where the two grids agree and the grid spacing (2π/256 in φ) is below a
-        # quarter of the lobe's width, estimated from the sampler's largest pdf as 1/sqrt(pdf):
-        # two grids that both miss a sharp lobe agree on 0.
-        width = 1.0 / np.sqrt(np.maximum(pdf_max, 1e-12))
-        curve.quadrature_resolved = (np.all(np.abs(fine - coarse) <= 1e-3, axis=1)
-                                     & (2 * math.pi / 256 < width / 4))
-    if "reference" in estimators and ctx is None:
-        model = ref.for_spec(spec)
-        if model is not None:
-            curve.reference = np.array([model.albedo(t) for t in rad])
+    if do_eval:
+        curve.eval, curve.eval_err = column("eval"), column("eval_err")
+    if do_quad:
+        curve.quadrature, curve.quadrature_resolved = column("quadrature"), column("resolved")
+    if model is not None:
+        curve.reference = column("reference")
     return curve
 
 
