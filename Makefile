@@ -13,7 +13,7 @@ SPP    ?= 64
 RES    ?= 256
 PYTEST_ARGS ?=
 
-.PHONY: all setup system render test bench figures clean distclean
+.PHONY: all setup system render test bench validate figures clean distclean
 
 all: test
 
@@ -43,6 +43,10 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) validation/bench_render.py
+
+# The validation campaign: validation/REPORT.md and validation/figures/ (about 15 min)
+validate: $(STAMP)
+	$(VENV)/bin/mi-brdfs validate --out validation
 
 # The README's figures
 figures: $(STAMP)

@@ -131,6 +131,17 @@ def _parser() -> argparse.ArgumentParser:
                     help="figure (default ./compare.png); EXRs beside it")
     cp.set_defaults(func=cmd_compare)
 
+    v = sub.add_parser("validate", help="the validation campaign: REPORT.md with figures",
+                       description="Run every check on every plugin over its parameter grid, "
+                                   "the comparisons with Mitsuba's built-ins and the lecture "
+                                   "notes' claims, and write REPORT.md with its figures.")
+    v.add_argument("--quick", action="store_true", help="CI-sized: fewer samples and parameters")
+    v.add_argument("--out", metavar="DIR",
+                   help="report folder (default: validation/ of a source checkout, "
+                        "else ./validation-report)")
+    v.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    v.set_defaults(func=cmd_validate)
+
     i = sub.add_parser("info", help="versions, variants, LLVM status and registered plugins")
     i.set_defaults(func=cmd_info)
     return parser
@@ -297,6 +308,33 @@ def cmd_compare(args) -> int:
         print(f"note: {note}")
     print("wrote " + ", ".join(written))
     return 0
+
+
+def cmd_validate(args) -> int:
+    import mi_brdfs
+    from .campaign import Context, run, sections
+    from .imageio import check_writable
+
+    if args.out:
+        out = Path(args.out)
+    else:
+        checkout = Path(__file__).resolve().parent.parent / "validation"
+        out = checkout if checkout.is_dir() else Path.cwd() / "validation-report"
+    out.mkdir(parents=True, exist_ok=True)
+    check_writable(out / "REPORT.md")
+    variant = mi_brdfs.use_variant(None)
+    if not variant.startswith(("llvm", "cuda")):
+        from .errors import MiBrdfsError
+        raise MiBrdfsError("the validation campaign needs a JIT variant (χ², dense quadratures); "
+                           f"{variant} is all this machine offers")
+    report, done = run(sections(), Context(out=out, quick=args.quick, variant=variant),
+                       progress=not args.quiet)
+    failed = [r for s in done for r in s.rows if not r.ok]
+    print(f"wrote {report}: {sum(len(s.rows) for s in done) - len(failed)} of "
+          f"{sum(len(s.rows) for s in done)} checks as expected")
+    for r in failed:
+        print(f"  unexpected: {r.plugin}: {r.check}: {r.result} ({r.verdict})")
+    return 1 if failed else 0
 
 
 def cmd_info(args) -> int:

@@ -16,6 +16,7 @@ check                      what it establishes
 ``check_positivity``       eval ≥ 0, pdf ≥ 0 everywhere on the sphere
 ``check_stability``        no NaN/Inf/negative at stress directions × parameter extremes
 ``check_furnace``          the white furnace render equals what E(θ) predicts, no NaN pixel
+``check_equal``            two BSDFs agree pointwise (eval, pdf, sample): a plugin = a built-in
 ``check_ndf``              ∫ D cosθ dω = 1 (microfacet terms)
 ``check_weak_furnace``     Heitz's weak white furnace = 1 (microfacet D and G1)
 =========================  ========================================================================
@@ -26,6 +27,7 @@ from .albedo import (AlbedoCurve, albedo_curve, albedo_eval, albedo_quadrature, 
 from .battery import format_table, run_battery
 from .consistency import check_consistency
 from .furnace import FurnaceRender, check_furnace, furnace_render
+from .pointwise import check_equal
 from .microfacet import (check_ndf, check_weak_furnace, mitsuba_terms, ndf_normalization,
                          weak_white_furnace)
 from .reciprocity import check_positivity, check_reciprocity, reciprocity
@@ -39,5 +41,5 @@ __all__ = [
     "check_reciprocity", "check_positivity", "reciprocity", "check_stability", "parameter_grid",
     "sweep_one", "check_furnace", "furnace_render", "FurnaceRender", "check_ndf",
     "check_weak_furnace", "ndf_normalization", "weak_white_furnace", "mitsuba_terms",
-    "run_battery", "format_table",
+    "run_battery", "format_table", "check_equal",
 ]

@@ -1,0 +1,20 @@
+"""
+The validation campaign: every check of :mod:`mi_brdfs.checks` on every plugin over a parameter
+grid with its extremes, the side-by-side comparisons with Mitsuba's built-ins, and the lecture
+notes' claims checked numerically; written as ``validation/REPORT.md`` with its figures.
+
+Run by ``mi-brdfs validate [--quick]`` and ``make validate``. Each section is a function that
+takes a :class:`~mi_brdfs.campaign.core.Context` and returns a
+:class:`~mi_brdfs.campaign.core.Section` (summary rows, Markdown, figures).
+"""
+
+from .core import Context, Section, run
+
+
+def sections() -> list:
+    """The report's sections, in order."""
+    from . import lambert
+    return [lambert.section]
+
+
+__all__ = ["Context", "Section", "run", "sections"]
