@@ -116,7 +116,10 @@ def swap_bsdfs(xml: str, bsdfs: dict) -> str:
 
     from .bsdfspec import parse_cli, to_xml
 
-    root = ET.fromstring(xml)
+    try:
+        root = ET.fromstring(xml)
+    except ET.ParseError as e:
+        raise MiBrdfsError(f"cannot parse the scene to swap its materials: {e}") from None
     for bsdf_id, spec in bsdfs.items():
         if isinstance(spec, str) and not spec.lstrip().startswith("<"):
             import shlex
