@@ -42,7 +42,7 @@ test: $(STAMP)
 	exit $$rc
 
 bench: $(STAMP)
-	$(PY) validation/bench_render.py
+	$(VENV)/bin/mi-brdfs bench --out validation
 
 # The validation campaign: validation/REPORT.md and validation/figures/ (about 15 min)
 validate: $(STAMP)

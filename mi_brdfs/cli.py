@@ -142,6 +142,16 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     v.set_defaults(func=cmd_validate)
 
+    b = sub.add_parser("bench", help="speed vs accuracy: SPEED_ACCURACY.md with plots",
+                       description="Measure every plugin and sampling choice against the "
+                                   "built-ins (ratios of medians of interleaved repeats, error "
+                                   "against time) and write SPEED_ACCURACY.md with its plots. "
+                                   "Run it on a quiet machine; it asserts nothing.")
+    b.add_argument("--quick", action="store_true", help="tiny sizes (a smoke run)")
+    b.add_argument("--out", metavar="DIR", help="report folder (default: as for validate)")
+    b.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    b.set_defaults(func=cmd_bench)
+
     i = sub.add_parser("info", help="versions, variants, LLVM status and registered plugins")
     i.set_defaults(func=cmd_info)
     return parser
@@ -310,9 +320,7 @@ def cmd_compare(args) -> int:
     return 0
 
 
-def cmd_validate(args) -> int:
-    import mi_brdfs
-    from .campaign import Context, run, sections
+def _report_folder(args, filename: str) -> Path:
     from .imageio import check_writable
 
     if args.out:
@@ -321,20 +329,48 @@ def cmd_validate(args) -> int:
         checkout = Path(__file__).resolve().parent.parent / "validation"
         out = checkout if checkout.is_dir() else Path.cwd() / "validation-report"
     out.mkdir(parents=True, exist_ok=True)
-    check_writable(out / "REPORT.md")
+    check_writable(out / filename)
+    return out
+
+
+def _jit_variant(what: str) -> str:
+    import mi_brdfs
+    from .errors import MiBrdfsError
+
     variant = mi_brdfs.use_variant(None)
     if not variant.startswith(("llvm", "cuda")):
-        from .errors import MiBrdfsError
-        raise MiBrdfsError("the validation campaign needs a JIT variant (χ², dense quadratures); "
-                           f"{variant} is all this machine offers")
-    report, done = run(sections(), Context(out=out, quick=args.quick, variant=variant),
-                       progress=not args.quiet)
-    failed = [r for s in done for r in s.rows if not r.ok]
-    print(f"wrote {report}: {sum(len(s.rows) for s in done) - len(failed)} of "
-          f"{sum(len(s.rows) for s in done)} checks as expected")
+        raise MiBrdfsError(f"{what} needs a JIT variant; {variant} is all this machine offers")
+    return variant
+
+
+def _run_report(args, sections, what: str, **kwargs) -> int:
+    from .campaign import Context, run
+
+    out = _report_folder(args, kwargs.get("filename", "REPORT.md"))
+    variant = _jit_variant(f"the {kwargs.get('title', 'report')}")
+    report, done = run(sections, Context(out=out, quick=args.quick, variant=variant),
+                       progress=not args.quiet, what=what, **kwargs)
+    rows = [r for s in done for r in s.rows]
+    failed = [r for r in rows if not r.ok]
+    print(f"wrote {report}: {len(rows) - len(failed)} of {len(rows)} {what} as expected")
     for r in failed:
         print(f"  unexpected: {r.plugin}: {r.check}: {r.result} ({r.verdict})")
-    return 1 if failed else 0
+    return failed
+
+
+def cmd_validate(args) -> int:
+    from .campaign import sections
+
+    return 1 if _run_report(args, sections(), "checks") else 0
+
+
+def cmd_bench(args) -> int:
+    from .benchmark import sections
+
+    _run_report(args, sections(), "measurements", title="mi_brdfs speed vs accuracy",
+                filename="SPEED_ACCURACY.md", command="mi-brdfs bench", make_target="make bench",
+                quick_note="tiny renders whose timings are too short to judge the targets")
+    return 0  # a benchmark reports targets met or missed; it does not fail
 
 
 def cmd_info(args) -> int:

@@ -15,3 +15,16 @@ def test01_quick_campaign(tmp_path, capsys):
     for figure in re.findall(r"\]\((figures/[^)]+\.png)\)", report):
         assert (tmp_path / figure).stat().st_size > 1000, figure
     assert "as expected" in capsys.readouterr().out
+
+
+def test02_quick_benchmark(tmp_path, capsys):
+    """mi-brdfs bench --quick: the report and its plots exist (the quick timings mean nothing)."""
+    assert main(["bench", "--quick", "--out", str(tmp_path), "-q"]) == 0
+    report = (tmp_path / "SPEED_ACCURACY.md").read_text()
+    assert report.startswith("# mi_brdfs speed vs accuracy")
+    for title in ("## Backends", "## Error against time"):
+        assert title in report
+    assert "| lambert vs diffuse | llvm_ad_rgb render time ratio |" in report
+    for figure in re.findall(r"\]\((figures/[^)]+\.png)\)", report):
+        assert (tmp_path / figure).stat().st_size > 1000, figure
+    assert "measurements as expected" in capsys.readouterr().out

@@ -90,7 +90,8 @@ def image(ctx: Context, path: Path, alt: str) -> str:
 
 def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs validation report",
         filename: str = "REPORT.md", command: str = "mi-brdfs validate",
-        make_target: str = "make validate", what: str = "checks") -> tuple[Path, list[Section]]:
+        make_target: str = "make validate", what: str = "checks",
+        quick_note: str = "fewer samples and parameters") -> tuple[Path, list[Section]]:
     """Run the sections in order and write the report; returns its path and the sections."""
     import drjit as dr
     import mitsuba as mi
@@ -122,7 +123,7 @@ def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs va
         f"{datetime.date.today().isoformat()}: mi_brdfs {mi_brdfs.__version__}, Mitsuba "
         f"{mi.__version__}, drjit {dr.__version__}, {platform.machine()} with "
         f"{os.cpu_count()} cores, {total / 60:.1f} min"
-        + (" (**quick mode**: fewer samples and parameters)" if ctx.quick else "") + ".",
+        + (f" (**quick mode**: {quick_note})" if ctx.quick else "") + ".",
         "Every number below comes from that run; rerun the command to regenerate it all.",
         "",
         "## Summary",
