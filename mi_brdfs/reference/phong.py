@@ -20,6 +20,8 @@ import math
 
 import numpy as np
 
+from .quadrature import gauss_legendre
+
 FORMS = ("normalized", "lecture", "original")
 LOBES = ("mirror", "halfway")
 
@@ -64,7 +66,8 @@ class Phong:
             cos = np.sum(R * V, axis=1)
         else:
             cos = _unit(L + V)[:, 2]
-        value = np.where(cos > 0, np.maximum(cos, 0.0) ** self.n, 0.0) * self.normalization
+        # cos ≤ 1 up to rounding, which cos^n would blow up for n ≳ 1e16
+        value = np.where(cos > 0, np.clip(cos, 0.0, 1.0) ** self.n, 0.0) * self.normalization
         if self.form == "original":
             value = value / np.where(L[:, 2] > 0, L[:, 2], 1.0)
         return value
@@ -120,7 +123,7 @@ class Phong:
         # u = cos^(n+1)(angle): the kinks in u, ascending (large angles give small u)
         cuts = sorted({min(max(math.cos(a), 0.0) ** n1, 1.0) for a in self._kinks(theta)
                        if 0 < a < math.pi / 2})
-        x, w = np.polynomial.legendre.leggauss(nodes)
+        x, w = gauss_legendre(nodes)
         x, w = 0.5 * (x + 1), 0.5 * w
         # u = lo + (hi − lo)·x²(3 − 2x): du/dx vanishes at both ends, which smooths the kinks
         # and the u^(1/(n+1)) behaviour at u = 0 for Gauss-Legendre
