@@ -1,13 +1,15 @@
 """
 The lecture's Phong reflectance model in its three forms (``normalized``, ``lecture``,
-``original``) with a mirror (Phong) or halfway (Blinn-Phong) lobe, importance-sampled, and stable
-in float32 from n = 0 to n = 1e30. The lobe terms live in :mod:`mi_brdfs.scattering.phong`.
+``original``) with a mirror (Phong) or halfway (Blinn-Phong) lobe, importance-sampled, finite and
+consistent in float32 for every exponent from 0 to 1e30. The lobe terms live in
+:mod:`mi_brdfs.scattering.phong`.
 """
 
 from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
 from ..errors import ParameterError
 from ..scattering import phong as lobes
@@ -35,7 +37,7 @@ def _exponent(props):
     if "exponent" in props and props.type("exponent") not in (T.Float, T.Integer):
         if props.type("exponent") != T.Object:
             raise ParameterError(PLUGIN, "exponent", props["exponent"],
-                                         "must be a float or a texture")
+                                 "must be a float or a texture")
         return _common.texture(props, PLUGIN, "exponent", 30.0, 0.0, EXPONENT_MAX)
     return _common.number(props, PLUGIN, "exponent", 30.0, 0.0, EXPONENT_MAX)
 
@@ -57,8 +59,7 @@ def _warn_energy(props, diffuse, specular) -> None:
     s = _upper_bound(props, "specular_reflectance", specular)
     if d is None or s is None:
         return
-    total = max(a + b for a in d for b in s) if len(d) == 1 or len(s) == 1 else \
-        max(a + b for a, b in zip(d, s))
+    total = float(np.max(np.add(d, s)))  # per channel; one value stands for every channel
     if total > 1.0 + 1e-6:  # not for rounding: an <rgb> 0.8 is stored as 0.800000012
         _common.warn(PLUGIN, f"diffuse_reflectance + specular_reflectance reaches {total:g} > 1: "
                              f"the normalized form then reflects more light than it receives "
@@ -150,7 +151,8 @@ def build() -> type:
         of the notes: their specular albedo at normal incidence is 2πks/(n+2) and 2πks/(n+1)
         (mirror lobe), above ks for small n. ``original`` is not reciprocal: the plugin declares
         ``NonSymmetric`` and keeps L the light side in both transport modes (radiance: L = ωo,
-        V = ωi; importance: L = ωi, V = ωo). There is no ambient term and no distance
+        V = ωi; importance: L = ωi, V = ωo, with 1/(N·L) floored at N·L = 1e-4, where the
+        model itself diverges). There is no ambient term and no distance
         attenuation: in a path tracer the environment and the light transport provide them (an
         ``ambient`` property is rejected: use ``<emitter type="constant">``).
 
@@ -244,16 +246,15 @@ def build() -> type:
         def parameters_changed(self, keys):
             """Precompute the lobe constants and the lobe choice probability."""
             n = self.m_exponent
-            if self._textured_exponent:
-                n_mean = dr.detach(n.mean())
-            else:
+            if not self._textured_exponent:
                 self._constants = constants(self.m_form, self.m_lobe, n)
-                n_mean = dr.detach(self._constants[0])
+            n_mean = dr.clip(dr.detach(n.mean() if self._textured_exponent else n), 0.0,
+                             EXPONENT_MAX)
             # Lobe choice by albedo weights, from the textures' means (as Mitsuba's roughplastic
             # and Mitsuba 0.6's phong): constant per BSDF, so nothing to evaluate per call.
             w_d = dr.detach(self.m_diffuse_reflectance.mean())
             w_s = dr.detach(self.m_specular_reflectance.mean()) * lobes.specular_albedo(
-                self.m_form, self.m_lobe, dr.clip(n_mean, 0.0, EXPONENT_MAX))
+                self.m_form, self.m_lobe, n_mean)
             total = w_d + w_s
             self._p_glossy = Float(select(total > 0, w_s / select(total > 0, total, 1.0), 0.5))
             self._p_diffuse = 1.0 - self._p_glossy

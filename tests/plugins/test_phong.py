@@ -506,3 +506,11 @@ def test24_energy_warning(variant_scalar_rgb):
         mi.load_dict(phong(form="lecture", diffuse_reflectance=0.9, specular_reflectance=0.9))
         mi.load_dict(phong(diffuse_reflectance={"type": "rgb", "value": [0.8, 0.1, 0.3]},
                            specular_reflectance={"type": "rgb", "value": [0.2, 0.9, 0.7]}))
+
+
+def test25_bad_exponent_texture(variant_scalar_rgb):
+    """A bitmap exponent is checked from its data, like a reflectance texture."""
+    bitmap = mi.Bitmap(np.full((4, 4, 1), -3.0, dtype=np.float32))
+    with pytest.raises(RuntimeError, match=r'"exponent" = "a texture with values in \[-3, -3\]" '
+                                           r'is invalid: must be finite and within \[0, 1e\+30\]'):
+        mi.load_dict(phong(exponent={"type": "bitmap", "bitmap": bitmap, "raw": True}))
