@@ -4,6 +4,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -16,3 +18,14 @@ def test01_bench_render_quick(tmp_path):
     import json
     rows = json.loads(out.read_text())
     assert all(r["median_ratio"] > 0 and len(r["plugin_s"]) == r["repeats"] for r in rows)
+
+
+def test02_phong_float32_quick():
+    """float32 against float64 needs the float32 variant llvm_ad_rgb."""
+    from conftest import LLVM_OK
+    if not LLVM_OK:
+        pytest.skip("llvm_ad_rgb: no working libLLVM")
+    p = subprocess.run([sys.executable, str(ROOT / "validation" / "phong_float32.py"), "--quick"],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert "| 1e+06 |" in p.stdout and "no NaN, Inf or negative value" in p.stdout

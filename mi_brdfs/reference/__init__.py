@@ -15,9 +15,10 @@ import mitsuba as mi
 import numpy as np
 
 from .lambert import Lambert
+from .phong import Phong
 from .quadrature import hemisphere_albedo
 
-__all__ = ["for_spec", "color", "Lambert", "hemisphere_albedo"]
+__all__ = ["for_spec", "color", "Lambert", "Phong", "hemisphere_albedo"]
 
 
 def color(value, default=None) -> np.ndarray | None:
@@ -47,4 +48,11 @@ def for_spec(spec):
     if kind in ("lambert", "diffuse"):
         rho = color(spec.get("reflectance"), 0.5)
         return None if rho is None else Lambert(rho)
+    if kind == "phong":
+        rho_d = color(spec.get("diffuse_reflectance"), 0.5)
+        k_s = color(spec.get("specular_reflectance"), 0.2)
+        n = spec.get("exponent", 30.0)
+        if rho_d is None or k_s is None or not isinstance(n, (int, float)):
+            return None
+        return Phong(rho_d, k_s, n, spec.get("form", "normalized"), spec.get("lobe", "mirror"))
     return None
