@@ -13,8 +13,8 @@ from .core import Context, Section, run
 
 def sections() -> list:
     """The report's sections, in order."""
-    from . import lambert
-    return [lambert.section]
+    from . import lambert, phong
+    return [lambert.section, phong.section]
 
 
 __all__ = ["Context", "Section", "run", "sections"]
