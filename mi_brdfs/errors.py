@@ -13,11 +13,17 @@ class ParameterError(MiBrdfsError, ValueError):
         super().__init__(f'{plugin}: parameter "{name}" = {_show(value)} is invalid: {allowed}')
 
 
+class Description(str):
+    """A value shown as prose in an error message, not quoted (e.g. 'a texture with ...')."""
+
+
 class MiBrdfsWarning(UserWarning):
     """Something works, but not the way the user probably wants (e.g. a fallback variant)."""
 
 
 def _show(value) -> str:
+    if isinstance(value, Description):
+        return str(value)
     if isinstance(value, str):
         return f'"{value}"'
     if isinstance(value, float):

@@ -237,3 +237,19 @@ def test25_pytest_helpers_raise_with_the_message(any_variant):
         testing.assert_reciprocal(broken("reciprocal"))
     with pytest.raises(AssertionError, match="creates energy"):
         testing.assert_energy_conserving(broken("energy"), thetas_deg=(0.0,), n=500)
+
+
+def test26_checks_run_in_polarized_variants():
+    """The batch layer sets wavelengths as an UnpolarizedSpectrum (Spectrum is a Mueller matrix)."""
+    from conftest import set_variant
+    set_variant("scalar_spectral_polarized")
+    result = checks.check_consistency({"type": "lambert", "reflectance": 0.6}, n=50)
+    assert result.passed, result.message
+    mean, _ = checks.albedo_sampled({"type": "lambert", "reflectance": 0.6}, 0.3, n=200)
+    np.testing.assert_allclose(mean, 0.6, rtol=1e-6)
+
+
+def test27_check_equal_rejects_a_different_bsdf(jit):
+    assert checks.check_equal("lambert", "diffuse", n=10_000, rtol=0, atol=0).passed
+    result = checks.check_equal("lambert reflectance=0.5", "diffuse reflectance=0.6", n=10_000)
+    assert not result.passed and result.value == pytest.approx(1 / 6, rel=1e-5)

@@ -61,9 +61,9 @@ def interaction(wi, n: int | None = None, uv=(0.5, 0.5)):
     si.uv = mi.Point2f(*uv)
     si.n = mi.Vector3f(0, 0, 1)
     si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
-    if mi.is_spectral:
-        si.wavelengths = mi.Spectrum(WAVELENGTHS) if not is_jit() else \
-            dr.zeros(mi.Spectrum, n or 1) + mi.Spectrum(WAVELENGTHS)
+    if mi.is_spectral:  # (UnpolarizedSpectrum: in polarized variants Spectrum is a Mueller matrix)
+        si.wavelengths = mi.UnpolarizedSpectrum(WAVELENGTHS) if not is_jit() else \
+            dr.zeros(mi.UnpolarizedSpectrum, n or 1) + mi.UnpolarizedSpectrum(WAVELENGTHS)
     return si
 
 

@@ -88,9 +88,14 @@ def furnace_render(spec, spp: int = 64, res: int = 64, seed: int = 0, max_depth:
     finite = np.isfinite(image)
     expected = None
     if predict:
-        curve = albedo_curve(spec, THETAS, n=n, estimators=("reference",))
-        best = curve.best()
-        expected = float(np.mean([expected_image(curve.theta_deg, best[:, c], res).mean()
+        from .. import reference
+
+        model = reference.for_spec(spec)
+        if model is not None:  # the float64 model's E(θ): no sampling needed
+            best = np.array([model.albedo(t) for t in np.radians(THETAS)])
+        else:
+            best = albedo_curve(spec, THETAS, n=n, estimators=()).sampled
+        expected = float(np.mean([expected_image(THETAS, best[:, c], res).mean()
                                   for c in range(best.shape[1])]))
     values = image[finite]
     return FurnaceRender(image=image, mean=float(values.mean()), std=float(values.std()),

@@ -13,21 +13,8 @@ import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
 from ..errors import MiBrdfsError
+from . import _batch
 from .result import CheckResult
-
-#: Wavelengths given to spectral variants, where a BSDF may depend on them.
-WAVELENGTHS = (450.0, 500.0, 550.0, 600.0)
-
-
-def _interaction(n: int, wi):
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.wi = mi.Vector3f(*[float(x) for x in wi])
-    si.uv = mi.Point2f(0.5, 0.5)
-    si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
-    if mi.is_spectral:
-        si.wavelengths = dr.zeros(mi.Spectrum, n) + mi.Spectrum(WAVELENGTHS)
-    return si
-
 
 def bsdf_adapter(bsdf, wi, ctx=None):
     """
@@ -40,13 +27,13 @@ def bsdf_adapter(bsdf, wi, ctx=None):
     ctx = ctx or mi.BSDFContext()
 
     def sample_func(sample):
-        si = _interaction(dr.width(sample), wi)
+        si = _batch.interaction(wi, dr.width(sample))
         bs, weight = bsdf.sample(ctx, si, sample[0], mi.Point2f(sample[1], sample[2]))
         ok = dr.any(mi.unpolarized_spectrum(weight) != 0)
         return bs.wo, dr.select(ok, mi.Float(1.0), mi.Float(0.0))
 
     def pdf_func(wo):
-        return bsdf.pdf(ctx, _interaction(dr.width(wo), wi), wo)
+        return bsdf.pdf(ctx, _batch.interaction(wi, dr.width(wo)), wo)
 
     return sample_func, pdf_func
 
@@ -65,8 +52,6 @@ def chi2_settings(bsdf, wi, ctx=None, n: int = 20_000) -> tuple[int, int, float]
     α = 0.05 at normal incidence is rejected at res 101, p = 0.003, and accepted at 201,
     p = 0.43, while its pdf is right).
     """
-    from . import _batch
-
     rng = np.random.default_rng(12345)
     s = _batch.sample(bsdf, wi, rng.random(n), rng.random((n, 2)), ctx)
     ok = np.any(s.weight != 0, axis=1) & np.isfinite(s.pdf)

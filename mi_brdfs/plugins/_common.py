@@ -16,7 +16,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import Description, ParameterError
 
 # -------------------------------------------------------------------------------------------------
 # Variant primitives
@@ -166,7 +166,7 @@ def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: 
             rng = texture_range(tex)
             if rng is not None and not (_in_range(rng[0], lo, hi, lo_open)
                                         and _in_range(rng[1], lo, hi, lo_open)):
-                shown = f"a texture with values in [{rng[0]:g}, {rng[1]:g}]"
+                shown = Description(f"a texture with values in [{rng[0]:g}, {rng[1]:g}]")
                 raise ParameterError(plugin, name, shown, allowed)
             return tex
         else:
