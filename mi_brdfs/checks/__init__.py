@@ -27,7 +27,7 @@ from .battery import format_table, run_battery
 from .consistency import check_consistency
 from .furnace import FurnaceRender, check_furnace, furnace_render
 from .microfacet import (check_ndf, check_weak_furnace, mitsuba_terms, ndf_normalization,
-                         weak_white_furnace)
+                         package_terms, weak_white_furnace)
 from .reciprocity import check_positivity, check_reciprocity, reciprocity
 from .result import CheckResult
 from .sampling import chi2_bsdf
@@ -39,5 +39,6 @@ __all__ = [
     "check_reciprocity", "check_positivity", "reciprocity", "check_stability", "parameter_grid",
     "sweep_one", "check_furnace", "furnace_render", "FurnaceRender", "check_ndf",
     "check_weak_furnace", "ndf_normalization", "weak_white_furnace", "mitsuba_terms",
+    "package_terms",
     "run_battery", "format_table",
 ]
