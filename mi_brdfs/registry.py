@@ -22,6 +22,7 @@ from .errors import MiBrdfsError, MiBrdfsWarning
 #: Plugin id -> module whose ``build()`` returns the plugin class for the current variant.
 PLUGINS = {
     "lambert": "mi_brdfs.plugins.lambert",
+    "cooktorrance": "mi_brdfs.plugins.cooktorrance",
 }
 
 # variant -> {plugin id -> class}
