@@ -119,6 +119,8 @@ def package_terms(kind: str, alpha: float, masking: str = "smith"):
 
     from ..scattering import microfacet as mf
 
+    if masking not in MASKING:
+        raise ValueError(f"masking must be one of {', '.join(MASKING)}, not {masking!r}")
     a = mi.Float(max(alpha, mf.ALPHA_MIN))
     g1 = {"smith": lambda v, m: mf.smith_g1(kind, a, v, m),
           "smith_mitsuba": lambda v, m: mf.smith_g1_mitsuba(kind, a, v, m),

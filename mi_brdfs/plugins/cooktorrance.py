@@ -117,7 +117,8 @@ def build() -> type:
     ALPHA_MIN_32 = float(np.float32(ALPHA_MIN))  # a texture holding 1e-4 holds it in float32
     ndf, vcavity_g = mf.ndf, mf.vcavity_g
     smith_g1, smith_g1_mitsuba = mf.smith_g1, mf.smith_g1_mitsuba
-    pdf_visible, pdf_ndf, jacobian = mf.pdf_visible_reflection, mf.pdf_ndf, mf.reflection_jacobian
+    pdf_visible_reflection, pdf_ndf = mf.pdf_visible_reflection, mf.pdf_ndf
+    jacobian = mf.reflection_jacobian
     sample_visible, sample_ndf = mf.sample_visible, mf.sample_ndf
     FRESNEL_TERMS = {"exact": fresnel.exact, "schlick": fresnel.schlick}
     DIFFERENTIABLE = mi.ParamFlags.Differentiable
@@ -324,7 +325,7 @@ def build() -> type:
             if self._fresnel_term is not None:
                 value = value * self._fresnel(si, dr.dot(wi, m), active)
             if self.m_sample_visible:
-                pdf = pdf_visible(D, g1_wi, wi)
+                pdf = pdf_visible_reflection(D, g1_wi, wi)
             else:
                 pdf = pdf_ndf(D, m) * jacobian(wo, m)
             return select(active, value, 0.0), select(active, pdf, 0.0)
