@@ -16,3 +16,10 @@ def test01_bench_render_quick(tmp_path):
     import json
     rows = json.loads(out.read_text())
     assert all(r["median_ratio"] > 0 and len(r["plugin_s"]) == r["repeats"] for r in rows)
+
+
+def test02_cooktorrance_report_quick():
+    p = subprocess.run([sys.executable, str(ROOT / "validation" / "cooktorrance_report.py"),
+                        "--quick"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert "| beckmann | V-cavity |" in p.stdout and "no NaN, Inf or negative" in p.stdout
