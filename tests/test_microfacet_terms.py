@@ -90,7 +90,8 @@ def test04_vcavity_g_is_the_textbook_form(variant_llvm_ad_rgb, np_rng):
     h = wi + wo
     h /= np.linalg.norm(h, axis=1, keepdims=True)
     g = np.array(mf.vcavity_g(vec(wi), vec(wo), vec(h)))
-    g1 = np.minimum(np.array(mf.vcavity_g1(vec(wi), vec(h))), np.array(mf.vcavity_g1(vec(wo), vec(h))))
+    g1 = np.minimum(np.array(mf.vcavity_g1(vec(wi), vec(h))),
+                    np.array(mf.vcavity_g1(vec(wo), vec(h))))
     np.testing.assert_allclose(g, g1, atol=2e-6)
     assert g.min() >= 0 and g.max() <= 1 and (g[wo[:, 2] < 0] == 0).all()
 

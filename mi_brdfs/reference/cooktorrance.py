@@ -136,7 +136,8 @@ def fresnel_dielectric_1982(cos_theta, eta) -> np.ndarray:
     g2 = eta**2 + c**2 - 1
     g = np.sqrt(np.maximum(g2, 0))
     with np.errstate(divide="ignore", invalid="ignore"):
-        f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * (1 + (c * (g + c) - 1) ** 2 / (c * (g - c) + 1) ** 2)
+        f = 0.5 * (g - c) ** 2 / (g + c) ** 2 * \
+            (1 + (c * (g + c) - 1) ** 2 / (c * (g - c) + 1) ** 2)
     return np.where(g2 > 0, f, 1.0)
 
 
