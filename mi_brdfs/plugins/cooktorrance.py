@@ -121,6 +121,14 @@ def build() -> type:
     jacobian = mf.reflection_jacobian
     sample_visible, sample_ndf = mf.sample_visible, mf.sample_ndf
     FRESNEL_TERMS = {"exact": fresnel.exact, "schlick": fresnel.schlick}
+    if tools.jit:
+        def per_channel(term, cos_theta, eta, k):
+            return term(cos_theta, eta, k)
+    else:
+        # Scalar: one operation on a colour costs ~0.4 µs, on a Python float ~0.05 µs, so F
+        # channel by channel takes 5 µs where the colour-wide formula takes 15 (of ~35 per call).
+        def per_channel(term, cos_theta, eta, k):
+            return type(eta)([term(cos_theta, e, k_) for e, k_ in zip(eta, k)])
     DIFFERENTIABLE = mi.ParamFlags.Differentiable
     DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
 
@@ -291,8 +299,8 @@ def build() -> type:
             """F per channel at the cosine between ωi and the facet normal (1 for 'none')."""
             if self._fresnel_term is None:
                 return 1.0
-            return self._fresnel_term(cos_theta, self.m_eta.eval(si, active),
-                                      self.m_k.eval(si, active))
+            return per_channel(self._fresnel_term, cos_theta, self.m_eta.eval(si, active),
+                               self.m_k.eval(si, active))
 
         def _p_microfacet(self, si, active):
             """Probability of sampling the microfacet lobe when both lobes are on."""
