@@ -28,8 +28,11 @@ DEFAULT_MATERIAL = "Cu"
 
 
 def conductor_names() -> list[str]:
-    """The names ``material`` accepts: the conductors of Mitsuba's IOR data, as roughconductor."""
-    folder = Path(mi.__file__).resolve().parent / "data" / "ior"
+    """
+    The names ``material`` accepts: the conductors of Mitsuba's IOR data, found through the file
+    resolver as Mitsuba finds their ``data/ior/<name>.eta.spd`` files for roughconductor.
+    """
+    folder = Path(str(mi.file_resolver().resolve("data/ior")))
     names = {p.name[: -len(".eta.spd")] for p in folder.glob("*.eta.spd")}
     return sorted(n for n in names if (folder / f"{n}.k.spd").is_file())
 
