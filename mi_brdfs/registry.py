@@ -23,6 +23,7 @@ from .errors import MiBrdfsError, MiBrdfsWarning
 PLUGINS = {
     "lambert": "mi_brdfs.plugins.lambert",
     "phong": "mi_brdfs.plugins.phong",
+    "cooktorrance": "mi_brdfs.plugins.cooktorrance",
 }
 
 # variant -> {plugin id -> class}

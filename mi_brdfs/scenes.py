@@ -27,7 +27,7 @@ def scenes_dir() -> Path:
 def scene_path(name_or_path: str | os.PathLike) -> Path:
     """
     A scene file: an existing path, or the name of a bundled scene (``showcase``, ``furnace``,
-    ``cbox``, with or without ``.xml``).
+    ``cbox``, ``metalbox``, with or without ``.xml``).
     """
     path = Path(name_or_path).expanduser()
     if path.is_file():

@@ -29,3 +29,10 @@ def test02_phong_float32_quick():
                        capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
     assert "| 1e+06 |" in p.stdout and "no NaN, Inf or negative value" in p.stdout
+
+
+def test03_cooktorrance_report_quick():
+    p = subprocess.run([sys.executable, str(ROOT / "validation" / "cooktorrance_report.py"),
+                        "--quick"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert "| beckmann | V-cavity |" in p.stdout and "no NaN, Inf or negative" in p.stdout

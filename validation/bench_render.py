@@ -11,8 +11,11 @@ median of the per-repeat ratios. Run it on a quiet machine; it asserts nothing.
     python validation/bench_render.py --quick    # a smoke run (the test suite runs this)
     python validation/bench_render.py --pairs phong   # only the pairs whose label says phong
 
-Targets (issue #2): llvm_ad_rgb ratio ≤ 1.03; scalar_rgb through the package's render path
-(mi_brdfs.render.render, which picks one thread per process) ≤ 12×.
+Targets (TARGETS): lambert (issue #2) llvm_ad_rgb ratio ≤ 1.03, scalar_rgb through the
+package's render path (mi_brdfs.render.render, which picks one thread per process) ≤ 12×;
+cooktorrance with shadowing=smith against roughconductor on scenes/metalbox.xml (issue #4)
+llvm_ad_rgb ≤ 1.03. The other rows (the textbook V-cavity model, scalar cooktorrance) are for
+information.
 """
 
 from __future__ import annotations
@@ -55,6 +58,10 @@ PAIRS = [
     Pair("phong vs lambert (furnace)", "furnace",
          {"material": "phong", "reflectance_name": "diffuse_reflectance", "reflectance": "0.8"},
          {"material": "lambert", "reflectance": "0.8"}, processes=1),
+    Pair("cooktorrance smith vs roughconductor", "metalbox", {"metal": "cooktorrance-smith"},
+         {"metal": "roughconductor"}, {"llvm_ad_rgb": 1.03}),
+    Pair("cooktorrance (V-cavity) vs roughconductor", "metalbox", {"metal": "cooktorrance"},
+         {"metal": "roughconductor"}),
 ]
 
 
@@ -137,7 +144,8 @@ def main(argv=None):
             results.append(dict(pair=pair.label, variant=variant, res=res, spp=spp, repeats=repeats,
                                 plugin_s=times[0], builtin_s=times[1], median_ratio=ratio,
                                 target=target, how=how))
-    print(f"Render time (Cornell box; phong on the furnace sphere), median of interleaved repeats "
+    print(f"Render time (Cornell box; phong on the furnace sphere; the metals on metalbox), "
+          f"median of interleaved repeats "
           f"({platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"Mitsuba {mi.__version__}):\n")
     print("| pair | variant | size | plugin | reference | ratio | target | how |")

@@ -29,7 +29,7 @@ from .consistency import check_consistency
 from .furnace import FurnaceRender, check_furnace, furnace_render
 from .pointwise import check_equal
 from .microfacet import (check_ndf, check_weak_furnace, mitsuba_terms, ndf_normalization,
-                         weak_white_furnace)
+                         package_terms, weak_white_furnace)
 from .reciprocity import check_positivity, check_reciprocity, reciprocity
 from .result import CheckResult
 from .sampling import chi2_bsdf
@@ -41,5 +41,6 @@ __all__ = [
     "check_reciprocity", "check_positivity", "reciprocity", "check_stability", "parameter_grid",
     "sweep_one", "check_furnace", "furnace_render", "FurnaceRender", "check_ndf",
     "check_weak_furnace", "ndf_normalization", "weak_white_furnace", "mitsuba_terms",
+    "package_terms",
     "run_battery", "format_table", "check_equal",
 ]

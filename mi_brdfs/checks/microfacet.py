@@ -9,8 +9,9 @@ Checks of microfacet terms on their own, before they become a BSDF:
   physically based masking function, Smith and V-cavity alike.
 
 Terms are given as callables on NumPy arrays of unit vectors, shape (n, 3): ``D(m)`` → (n,) and
-``G1(v, m)`` → (n,). :func:`mitsuba_terms` wraps ``mi.MicrofacetDistribution`` (JIT variants);
-the package's own terms come from :mod:`mi_brdfs.scattering` once a model provides them.
+``G1(v, m)`` → (n,). :func:`mitsuba_terms` wraps ``mi.MicrofacetDistribution`` and
+:func:`package_terms` the package's own :mod:`mi_brdfs.scattering.microfacet` (JIT variants); the
+float64 terms of :mod:`mi_brdfs.reference.cooktorrance` are such callables already.
 Integrals use Gauss-Legendre in cosθ and the midpoint rule in φ, with more nodes for sharper
 lobes (about 60/α per dimension).
 """
@@ -75,30 +76,56 @@ def weak_white_furnace_wi(D, G1, wo: np.ndarray, alpha: float) -> float:
     return total
 
 
-def mitsuba_terms(kind: str, alpha: float):
-    """
-    ``(D, G1)`` from ``mi.MicrofacetDistribution`` (``kind`` 'beckmann' or 'ggx'), evaluated in
-    the current JIT variant: D = ``eval(m)``, G1 = ``smith_g1(v, m)``.
-    """
+def _jit_terms(D, G1):
+    """NumPy callables (n, 3) → (n,) of DrJit terms ``D(m)``, ``G1(v, m)`` (JIT variants)."""
     import drjit as dr
     import mitsuba as mi
 
     if not dr.is_jit_v(mi.Float):
-        raise RuntimeError("mitsuba_terms needs a JIT variant (it evaluates arrays)")
-    mtype = {"beckmann": mi.MicrofacetType.Beckmann, "ggx": mi.MicrofacetType.GGX}[kind]
-    distr = mi.MicrofacetDistribution(mtype, alpha, True)
+        raise RuntimeError("microfacet terms are evaluated on arrays: this needs a JIT variant")
 
     def vec(a):
         a = np.asarray(a, dtype=np.float32)
         return mi.Vector3f(mi.Float(a[:, 0]), mi.Float(a[:, 1]), mi.Float(a[:, 2]))
 
-    def D(m):
-        return np.array(distr.eval(vec(m)), dtype=np.float64)
+    return (lambda m: np.array(D(vec(m)), dtype=np.float64),
+            lambda v, m: np.array(G1(vec(v), vec(m)), dtype=np.float64))
 
-    def G1(v, m):
-        return np.array(distr.smith_g1(vec(v), vec(m)), dtype=np.float64)
 
-    return D, G1
+def mitsuba_terms(kind: str, alpha: float):
+    """
+    ``(D, G1)`` from ``mi.MicrofacetDistribution`` (``kind`` 'beckmann' or 'ggx'), evaluated in
+    the current JIT variant: D = ``eval(m)``, G1 = ``smith_g1(v, m)``.
+    """
+    import mitsuba as mi
+
+    from ..scattering.microfacet import mitsuba_type
+
+    distr = mi.MicrofacetDistribution(mitsuba_type(kind), alpha, True)
+    return _jit_terms(distr.eval, distr.smith_g1)
+
+
+#: The masking functions of :mod:`mi_brdfs.scattering.microfacet`, by name.
+MASKING = ("smith", "smith_mitsuba", "vcavity")
+
+
+def package_terms(kind: str, alpha: float, masking: str = "smith"):
+    """
+    ``(D, G1)`` from the package's own terms (:mod:`mi_brdfs.scattering.microfacet`), evaluated
+    in the current JIT variant: ``masking`` 'smith' (exact), 'smith_mitsuba' (Mitsuba's
+    rational Beckmann approximation) or 'vcavity'.
+    """
+    import mitsuba as mi
+
+    from ..scattering import microfacet as mf
+
+    if masking not in MASKING:
+        raise ValueError(f"masking must be one of {', '.join(MASKING)}, not {masking!r}")
+    a = mi.Float(max(alpha, mf.ALPHA_MIN))
+    g1 = {"smith": lambda v, m: mf.smith_g1(kind, a, v, m),
+          "smith_mitsuba": lambda v, m: mf.smith_g1_mitsuba(kind, a, v, m),
+          "vcavity": mf.vcavity_g1}[masking]
+    return _jit_terms(lambda m: mf.ndf(kind, a, m), g1)
 
 
 def check_ndf(D, alpha: float, label: str, tol: float = TOL) -> CheckResult:

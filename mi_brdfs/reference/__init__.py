@@ -14,11 +14,12 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
+from .cooktorrance import CookTorrance
 from .lambert import Lambert
 from .phong import Phong
 from .quadrature import hemisphere_albedo
 
-__all__ = ["for_spec", "color", "Lambert", "Phong", "hemisphere_albedo"]
+__all__ = ["for_spec", "color", "Lambert", "Phong", "CookTorrance", "hemisphere_albedo"]
 
 
 def color(value, default=None) -> np.ndarray | None:
@@ -55,4 +56,33 @@ def for_spec(spec):
         if rho_d is None or k_s is None or not isinstance(n, (int, float)):
             return None
         return Phong(rho_d, k_s, n, spec.get("form", "normalized"), spec.get("lobe", "mirror"))
+    if kind in ("cooktorrance", "roughconductor"):
+        return _cooktorrance(spec)
     return None
+
+
+def _cooktorrance(spec):
+    """
+    The reference of a ``cooktorrance`` dict, or of a ``roughconductor`` one, which is the same
+    model with Smith's G as Mitsuba computes it and the exact Fresnel term (its defaults η = 0,
+    k = 1: F ≡ 1). None for named materials (their spectra are Mitsuba's data), anisotropic or
+    textured roughness.
+    """
+    alpha = spec.get("alpha", 0.1)
+    if not isinstance(alpha, (int, float)) or "material" in spec or "alpha_u" in spec:
+        return None
+    params = {"distribution": spec.get("distribution", "beckmann")}
+    if spec["type"] == "roughconductor":
+        eta, k, diffuse = color(spec.get("eta"), 0.0), color(spec.get("k"), 1.0), np.zeros(1)
+        params.update(shadowing="smith", fresnel="exact")
+    else:
+        params.update(shadowing=spec.get("shadowing", "vcavity"),
+                      fresnel=spec.get("fresnel", "exact"))
+        if "eta" not in spec and params["fresnel"] != "none":
+            return None  # the default material, copper
+        eta, k = color(spec.get("eta"), 1.5), color(spec.get("k"), 0.0)
+        diffuse = color(spec.get("diffuse_reflectance"), 0.0)
+    specular = color(spec.get("specular_reflectance"), 1.0)
+    if any(x is None for x in (eta, k, specular, diffuse)):
+        return None
+    return CookTorrance(alpha, eta=eta, k=k, specular=specular, diffuse=diffuse, **params)

@@ -1,0 +1,61 @@
+r"""
+Fresnel reflectance of unpolarised light at a smooth interface with relative complex index of
+refraction η + ik, per channel: η and k may be spectra (RGB, wavelengths) or plain floats,
+``cos_theta_i`` is a Float. k = 0 is a dielectric (with total internal reflection for η < 1),
+η = 0 with k = 1 a perfect mirror.
+
+:func:`exact` is the full formula (Born & Wolf; Cook & Torrance 1982 use its dielectric case,
+F = ½ (g−c)²/(g+c)² [1 + (c(g+c)−1)²/(c(g−c)+1)²] with g² = η² + c² − 1). With
+a² + b² = sqrt((η² − k² − sin²θ)² + 4η²k²) and 2a² = (a² + b²) + (η² − k² − sin²θ):
+
+.. math::
+
+    R_s = \frac{(a - \cos\theta)^2 + b^2}{(a + \cos\theta)^2 + b^2}, \qquad
+    R_p = R_s \, \frac{(a\cos\theta - \sin^2\theta)^2 + b^2\cos^2\theta}
+                      {(a\cos\theta + \sin^2\theta)^2 + b^2\cos^2\theta}, \qquad
+    F = \tfrac12 (R_s + R_p).
+
+These are the usual expressions (pbrt-v3 ``FrConductor``, Mitsuba's ``fresnel_conductor``) with
+each numerator and denominator written as a sum of squares: never negative, and free of the
+cancellation that makes the expanded form (a² + b² − 2a cosθ + cos²θ) round below 0 as η → 1.
+
+:func:`schlick` is Schlick's approximation R0 + (1 − R0)(1 − cosθ)⁵ with the normal-incidence
+reflectance R0 = ((η − 1)² + k²) / ((η + 1)² + k²) of the same η, k (:func:`r0`).
+"""
+
+from __future__ import annotations
+
+import drjit as dr
+
+# Floor of denominators that vanish only in degenerate cases (grazing light on η = 1, k = 0):
+# there the numerator vanishes too, and F = 0 is the limit.
+_TINY = 1e-30
+
+
+def exact(cos_theta_i, eta, k):
+    """Unpolarised Fresnel reflectance at incidence cosθi ∈ [0, 1], exact, per channel."""
+    c = dr.clip(cos_theta_i, 0.0, 1.0)
+    c2 = c * c
+    s2 = 1.0 - c2
+    t0 = dr.square(eta) - dr.square(k) - s2
+    ab = dr.sqrt(dr.square(t0) + 4.0 * dr.square(eta * k))  # a² + b²
+    a = dr.sqrt(dr.maximum(0.5 * (ab + t0), 0.0))
+    b2 = dr.maximum(0.5 * (ab - t0), 0.0)
+    rs = (dr.square(a - c) + b2) / dr.maximum(dr.square(a + c) + b2, _TINY)
+    ac = a * c
+    rp = rs * (dr.square(ac - s2) + b2 * c2) / dr.maximum(dr.square(ac + s2) + b2 * c2, _TINY)
+    return 0.5 * (rs + rp)
+
+
+def r0(eta, k):
+    """Reflectance at normal incidence: ((η − 1)² + k²) / ((η + 1)² + k²)."""
+    k2 = dr.square(k)
+    return (dr.square(eta - 1.0) + k2) / (dr.square(eta + 1.0) + k2)
+
+
+def schlick(cos_theta_i, eta, k):
+    """Schlick's approximation R0 + (1 − R0)(1 − cosθi)⁵, with R0 from η and k."""
+    f0 = r0(eta, k)
+    x = 1.0 - dr.clip(cos_theta_i, 0.0, 1.0)
+    x2 = x * x
+    return f0 + (1.0 - f0) * (x2 * x2 * x)

@@ -1,0 +1,195 @@
+r"""
+Microfacet terms for isotropic Beckmann and GGX surfaces: the distribution D, Smith's masking
+(exactly, and as Mitsuba's ``microfacet.h`` computes it), the V-cavity masking of Cook & Torrance,
+the sampling of microfacet normals (by D·cosθ and by the distribution of visible normals) and
+the densities that go with them.
+
+Conventions (Walter et al. 2007, "Microfacet Models for Refraction through Rough Surfaces"):
+directions are unit vectors in the local frame, pointing away from the surface; ``m`` is a
+microfacet normal; α is the roughness, for Beckmann the RMS slope (Cook & Torrance's m):
+
+.. math::
+
+    D_\mathrm{B}(m) = \frac{e^{-\tan^2\theta_m/\alpha^2}}{\pi\alpha^2\cos^4\theta_m}, \qquad
+    D_\mathrm{GGX}(m) = \frac{1}{\pi\alpha^2\cos^4\theta_m\,(1 + \tan^2\theta_m/\alpha^2)^2},
+
+both normalised as ∫ D(m) cosθm dωm = 1 (Walter eqs. 25 and 33). Smith's masking
+G1(v, m) = χ⁺(v·m / v·n) / (1 + Λ(v)) with, for a = 1 / (α tanθv),
+
+.. math::
+
+    \Lambda_\mathrm{B} = \frac{\operatorname{erf}(a) - 1}{2} + \frac{e^{-a^2}}{2a\sqrt\pi},
+    \qquad
+    \Lambda_\mathrm{GGX} = \frac{\sqrt{1 + \alpha^2\tan^2\theta_v} - 1}{2}
+
+(Walter eqs. 27 and 34; Heitz 2014, "Understanding the Masking-Shadowing Function", eqs. 72
+and 86). Mitsuba 3 replaces the Beckmann G1 by Walter's rational approximation (eq. 27,
+< 0.35 % error): :func:`smith_g1_mitsuba` reproduces it, for fidelity with ``roughconductor``.
+The V-cavity masking (Cook & Torrance 1982; Heitz 2014 §4.2) is
+G1(v, m) = min(1, 2 (n·m)(n·v) / (v·m)) and G = min(G1(ωi), G1(ωo)).
+
+All functions take ``kind`` ('beckmann' or 'ggx') as a plain string (configuration, not data)
+and an α already clamped to :data:`ALPHA_MIN`.
+"""
+
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+BECKMANN, GGX = "beckmann", "ggx"
+DISTRIBUTIONS = (BECKMANN, GGX)
+
+#: Smallest roughness the terms are evaluated at, as Mitsuba's ``MicrofacetDistribution``
+#: clamps it: below, D = 1/(πα²) at the peak exceeds 3e7 and the lobe is narrower than
+#: float32 directions near the normal resolve (physics-notes §3g).
+ALPHA_MIN = 1e-4
+
+#: Mitsuba's D cut-off: D is 0 where D·cosθm ≤ 1e-20, which removes the underflowing tails
+#: (and every microfacet below the horizon, where cosθm ≤ 0).
+D_COS_MIN = 1e-20
+
+# Denominators that can be exactly 0 in degenerate lanes (cosθ = 0) are floored at _TINY: a
+# JIT lane would otherwise hold NaN (masked, but visible to AD), and a scalar variant, where
+# Float is a Python float, would raise ZeroDivisionError.
+_TINY = 1e-30
+
+_INV_SQRT_PI = 0.5641895835477563
+
+
+def mitsuba_type(kind: str):
+    """The ``mi.MicrofacetType`` of 'beckmann' or 'ggx'."""
+    return {BECKMANN: mi.MicrofacetType.Beckmann, GGX: mi.MicrofacetType.GGX}[kind]
+
+
+def ndf(kind: str, alpha, m):
+    """D(m), per unit solid angle of microfacet normals; 0 below the horizon."""
+    cos2 = dr.square(m.z)
+    # sin²θm/α² from the x, y components: exact near the normal, where 1 - cos²θ cancels
+    slope2 = dr.square(m.x / alpha) + dr.square(m.y / alpha)
+    if kind == BECKMANN:
+        d = dr.exp(-slope2 / dr.maximum(cos2, _TINY)) / \
+            dr.maximum(dr.pi * (alpha * alpha) * dr.square(cos2), _TINY)
+    else:
+        d = 1.0 / dr.maximum(dr.pi * (alpha * alpha) * dr.square(slope2 + cos2), _TINY)
+    return dr.select(d * m.z > D_COS_MIN, d, 0.0)
+
+
+def _tan2_alpha2(alpha, v):
+    """(α² sin²θv, α² tan²θv) of a unit vector ``v``."""
+    xy = dr.square(alpha * v.x) + dr.square(alpha * v.y)
+    return xy, xy / dr.maximum(dr.square(v.z), _TINY)
+
+
+def _facing(g1, v, m):
+    """χ⁺: a microfacet is seen only from its front, and only from the side of the surface."""
+    return dr.select(dr.dot(v, m) * v.z > 0, g1, 0.0)
+
+
+def smith_lambda(kind: str, alpha, v):
+    """Smith's Λ(v), exact (Beckmann with erf); 0 at normal incidence."""
+    _, t2 = _tan2_alpha2(alpha, v)
+    if kind == BECKMANN:
+        a = dr.rsqrt(t2)  # 1/(α tanθ): +inf at normal incidence, where Λ = 0 exactly
+        # e^{-a²}/a: a = inf gives 0/inf = 0; the floor only keeps a = 0 (tangent) finite
+        return 0.5 * (dr.erf(a) - 1.0) + \
+            0.5 * _INV_SQRT_PI * dr.exp(-dr.square(a)) / dr.maximum(a, _TINY)
+    return 0.5 * (dr.sqrt(1.0 + t2) - 1.0)
+
+
+def smith_g1(kind: str, alpha, v, m):
+    """Smith's masking G1(v, m) = χ⁺ / (1 + Λ(v)), exact for both distributions."""
+    return _facing(1.0 / (1.0 + smith_lambda(kind, alpha, v)), v, m)
+
+
+def smith_g1_mitsuba(kind: str, alpha, v, m):
+    """
+    G1(v, m) as Mitsuba 3 computes it: for Beckmann Walter's rational approximation
+    (3.535a + 2.181a²)/(1 + 2.276a + 2.577a²), 1 for a ≥ 1.6 (< 0.35 % error); for GGX the
+    exact form, as :func:`smith_g1`.
+    """
+    xy, t2 = _tan2_alpha2(alpha, v)
+    if kind == BECKMANN:
+        a = dr.rsqrt(t2)
+        a2 = dr.square(a)
+        g1 = dr.select(a >= 1.6, 1.0,
+                       (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2))
+    else:
+        g1 = 2.0 / (1.0 + dr.sqrt(1.0 + t2))
+    return _facing(dr.select(xy == 0, 1.0, g1), v, m)
+
+
+def vcavity_g1(v, m):
+    """
+    The V-cavity masking of one direction: min(1, 2 (n·m)(n·v) / (v·m)); 0 for the back of the
+    facet, for v below the surface and for facets below the horizon (which do not exist).
+    """
+    vm = dr.dot(v, m)
+    g1 = dr.minimum(1.0, 2.0 * m.z * v.z / dr.maximum(vm, _TINY))
+    return dr.select((vm > 0) & (v.z > 0) & (m.z > 0), g1, 0.0)
+
+
+def vcavity_g(wi, wo, m):
+    """
+    Cook & Torrance's masking-shadowing G = min(1, 2(N·H)(N·V)/(V·H), 2(N·H)(N·L)/(V·H)) for the
+    reflection half-vector ``m``, i.e. min(G1(ωi), G1(ωo)) of :func:`vcavity_g1`. V·H = L·H
+    there; their mean stands for both, which keeps G symmetric in ωi, ωo to the last bit (with
+    ωi·m alone, float32 rounding broke reciprocity by 4e-4 at grazing angles).
+    """
+    vm = 0.5 * (dr.dot(wi, m) + dr.dot(wo, m))
+    g = dr.minimum(1.0, 2.0 * m.z * dr.minimum(wi.z, wo.z) / dr.maximum(vm, _TINY))
+    return dr.select((vm > 0) & (wi.z > 0) & (wo.z > 0), g, 0.0)
+
+
+def sample_ndf(kind: str, alpha, u):
+    """
+    A microfacet normal with density D(m) cosθm (:func:`pdf_ndf`) from ``u`` in [0, 1)²
+    (Walter eqs. 28 and 35): tan²θm = −α² ln(1 − u₁) (Beckmann) or α² u₁/(1 − u₁) (GGX),
+    φm = 2π u₂.
+
+    sinθm is taken from tan²θm, not as sqrt(1 − cos²θm): in float32 the latter rounds to 0 for
+    α ≲ 1e-3 (cosθm rounds to 1 for 16 % of the samples at α = 1e-3, all at 1e-4), which would
+    put every such sample on the mirror direction; tan²θm keeps them apart down to α = 1e-4.
+    """
+    if kind == BECKMANN:
+        tan2 = -(alpha * alpha) * dr.log(1.0 - u.x)
+    else:  # u₁ < 1, but the floor keeps a scalar variant from dividing by 0 at u₁ = 1
+        tan2 = (alpha * alpha) * u.x / dr.maximum(1.0 - u.x, _TINY)
+    cos_theta = dr.rsqrt(1.0 + tan2)
+    sin_theta = dr.sqrt(tan2) * cos_theta
+    sin_phi, cos_phi = dr.sincos(dr.two_pi * u.y)
+    return mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta)
+
+
+def sample_visible(kind: str, alpha, wi, u):
+    """
+    A microfacet normal from the distribution of visible normals of ``wi``, density
+    :func:`pdf_visible` with the exact :func:`smith_g1` (Heitz & d'Eon 2014). This is Mitsuba's
+    own exact sampler (Jakob's numerical inversion for Beckmann, Heitz 2018 for GGX), the one
+    ``roughconductor`` uses.
+    """
+    m, _ = mi.MicrofacetDistribution(mitsuba_type(kind), alpha, True).sample(wi, u)
+    return m
+
+
+def pdf_ndf(d, m):
+    """The density of :func:`sample_ndf` per unit solid angle of m: D(m) cosθm."""
+    return d * m.z
+
+
+def pdf_visible(d, g1_wi, wi, m):
+    """The density of visible normals of ``wi``: G1(wi, m) |wi·m| D(m) / cosθi (Heitz eq. 2)."""
+    return d * g1_wi * dr.abs(dr.dot(wi, m)) / dr.maximum(wi.z, _TINY)
+
+
+def pdf_visible_reflection(d, g1_wi, wi):
+    """
+    The density of ωo = reflect(ωi, m) for m drawn by :func:`sample_visible`: :func:`pdf_visible`
+    times :func:`reflection_jacobian`, where |ωi·m| = |ωo·m| cancels: D(m) G1(ωi, m) / (4 cosθi).
+    """
+    return d * g1_wi / dr.maximum(4.0 * wi.z, _TINY)
+
+
+def reflection_jacobian(wo, m):
+    """|∂ωm/∂ωo| = 1 / (4 |ωo·m|) of the reflection ωo = reflect(ωi, m) (Walter eq. 14)."""
+    return 1.0 / dr.maximum(4.0 * dr.abs(dr.dot(wo, m)), _TINY)
