@@ -90,11 +90,25 @@ class RenderResult:
 
 
 def uses_python_plugins(scene) -> bool:
-    """Whether any object of the scene is a plugin written in Python (ours or a user's)."""
+    """
+    Whether an object the render uses is a plugin written in Python (ours or a user's): the
+    integrator, sensors, emitters, shapes and their BSDFs, with everything nested in them. A
+    BSDF the scene declares but no shape references does not count.
+    """
     import mitsuba as mi
 
-    params = mi.traverse(scene)
-    return any(not type(obj).__module__.startswith("mitsuba") for obj in params.hierarchy)
+    def python(obj) -> bool:
+        return obj is not None and not type(obj).__module__.startswith("mitsuba")
+
+    roots = [scene.integrator(), *scene.sensors(), *scene.emitters()]
+    for shape in scene.shapes():
+        roots += [shape, shape.bsdf()]
+    for root in roots:
+        if root is None:
+            continue
+        if python(root) or any(python(obj) for obj in mi.traverse(root).hierarchy):
+            return True
+    return False
 
 
 def _cores() -> int:

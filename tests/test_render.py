@@ -40,6 +40,12 @@ def test04_time_budget_stops_early(variant_llvm_ad_rgb):
 def test05_python_plugins_detected(variant_scalar_rgb):
     assert uses_python_plugins(load_scene("cbox", material="lambert", res=4))
     assert not uses_python_plugins(load_scene("cbox", material="diffuse", res=4))
+    # nested in a built-in, and declared but unused
+    nested = mi.load_string("""<scene version="3.0.0"><shape type="sphere">
+        <bsdf type="twosided"><bsdf type="lambert"/></bsdf></shape></scene>""")
+    unused = mi.load_string("""<scene version="3.0.0"><bsdf type="lambert" id="spare"/>
+        <shape type="sphere"><bsdf type="diffuse"/></shape></scene>""")
+    assert uses_python_plugins(nested) and not uses_python_plugins(unused)
 
 
 def test06_scalar_processes_equal_one_thread(variant_scalar_rgb):
