@@ -127,23 +127,24 @@ def _render(path, spp: int, seed: int, defines=None, bsdfs=None) -> np.ndarray:
 
 def compare(a, b=None, swap: dict | None = None, spp: int = 64, seed: int = 0,
             defines: dict | None = None, labels=None, with_flip: bool = True,
-            defines_b: dict | None = None) -> Comparison:
+            defines_b: dict | None = None, swap_a: dict | None = None) -> Comparison:
     """
     Render A and B in the current variant with the same spp and seed, plus A with seed + 1.
 
     Parameter ``a``, ``b``: scene files or bundled names. Without ``b``, B is A with ``swap``
     applied (``{id: BSDF}`` replaces the scene's ``<bsdf id=...>``: dict, XML or 'type k=v'),
     or with ``defines_b`` overriding some of ``defines`` (e.g. cbox's ``material``).
+    ``swap_a`` swaps materials of A the same way (e.g. one scene, two BSDFs).
     """
     import mitsuba as mi
 
     from .bsdfspec import describe
     if b is None and not swap and not defines_b:
         raise MiBrdfsError("compare needs two scenes, or one scene and --swap ID=BSDF")
-    img_a = _render(a, spp, seed, defines)
+    img_a = _render(a, spp, seed, defines, bsdfs=swap_a)
     img_b = _render(b if b is not None else a, spp, seed, dict(defines or {}, **(defines_b or {})),
                     bsdfs=swap)
-    img_a2 = _render(a, spp, seed + 1, defines)
+    img_a2 = _render(a, spp, seed + 1, defines, bsdfs=swap_a)
     if img_a.shape != img_b.shape:
         raise MiBrdfsError(f"the renders differ in size: {img_a.shape} vs {img_b.shape}")
     if labels is None:

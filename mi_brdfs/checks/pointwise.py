@@ -21,11 +21,12 @@ def _rel(a: np.ndarray, b: np.ndarray, atol: float) -> np.ndarray:
 
 def check_equal(spec_a, spec_b, n: int | None = None, seed: int = 0, rtol: float = 1e-5,
                 atol: float = 1e-7, sample: bool = True, upper: bool = False,
-                ctx=None) -> CheckResult:
+                ctx=None, pdf: bool = True) -> CheckResult:
     """
-    Largest relative difference of eval, pdf (and sample: direction, pdf, weight) between two
-    BSDFs over ``n`` random pairs (upper hemisphere only with ``upper``). Differences below
-    ``atol`` absolute count as equal (float32 values near 0).
+    Largest relative difference of eval, pdf (unless ``pdf`` is false) and, with ``sample``,
+    of sample() (direction, pdf, weight) between two BSDFs over ``n`` random pairs (upper
+    hemisphere only with ``upper``). Differences below ``atol`` absolute count as equal (float32
+    values near 0). ``details['max']`` holds every quantity's largest difference, compared or not.
     """
     a, b = load_bsdf(spec_a), load_bsdf(spec_b)
     n = n or (100_000 if _batch.is_jit() else 500)
@@ -45,11 +46,13 @@ def check_equal(spec_a, spec_b, n: int | None = None, seed: int = 0, rtol: float
         # unit vectors: the absolute difference is the relative one
         errors["sample wo"] = np.where(produced, np.abs(sa.wo - sb.wo).max(axis=1), 0)
     worst = {k: float(np.max(v)) for k, v in errors.items()}
-    name, value = max(worst.items(), key=lambda kv: kv[1])
+    judged = {k: v for k, v in worst.items() if pdf or k != "pdf"}
+    name, value = max(judged.items(), key=lambda kv: kv[1])
     i = int(np.argmax(errors[name]))
     passed = value <= rtol
     msg = (f"equal: {describe(spec_a)} vs {describe(spec_b)}: largest relative difference "
-           f"{value:.3g} ({name}) over {n} pairs ({'≤' if passed else '>'} {rtol:g})")
+           f"{value:.3g} ({name}) over {n} pairs ({'≤' if passed else '>'} {rtol:g}; compared: "
+           f"{', '.join(judged)})")
     if not passed:
         msg += f" at wi={np.round(wi[i], 4).tolist()}, wo={np.round(wo[i], 4).tolist()}"
     return CheckResult("equal", passed, value, rtol, msg, details={"max": worst})
