@@ -33,6 +33,8 @@ def variant_tools() -> SimpleNamespace:
     matters: ``dr.select`` on a Spectrum and ``dr.zeros(BSDFSample3f)`` cost about 1 µs each
     there, a Python conditional and the (zero-initialised) default constructor 0.1 µs.
     """
+    from ..scattering.vector import Vec3
+
     jit = dr.is_jit_v(mi.Float)
     if jit:
         select = dr.select
@@ -57,6 +59,10 @@ def variant_tools() -> SimpleNamespace:
         # Mitsuba's dr::none_or<false>(mask): true only where it is known that no lane is active,
         # i.e. in scalar variants for a false mask; an early return there saves the rest.
         none=none,
+        # Directions for the terms (mi_brdfs.scattering.vector): mi.Vector3f in JIT variants,
+        # a tuple of Python floats in scalar ones, where vector operations are slow.
+        vec3=mi.Vector3f if jit else Vec3,
+        as_vec3=(lambda v: v) if jit else (lambda v: Vec3(v.x, v.y, v.z)),
         # Mueller matrices in polarized variants; the identity elsewhere.
         depolarize=mi.depolarizer if mi.is_polarized else (lambda value: value),
     )

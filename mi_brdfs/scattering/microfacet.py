@@ -37,6 +37,8 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
+from .vector import dot
+
 BECKMANN, GGX = "beckmann", "ggx"
 DISTRIBUTIONS = (BECKMANN, GGX)
 
@@ -83,7 +85,7 @@ def _tan2_alpha2(alpha, v):
 
 def _facing(g1, v, m):
     """χ⁺: a microfacet is seen only from its front, and only from the side of the surface."""
-    return dr.select(dr.dot(v, m) * v.z > 0, g1, 0.0)
+    return dr.select(dot(v, m) * v.z > 0, g1, 0.0)
 
 
 def smith_lambda(kind: str, alpha, v):
@@ -124,7 +126,7 @@ def vcavity_g1(v, m):
     The V-cavity masking of one direction: min(1, 2 (n·m)(n·v) / (v·m)); 0 for the back of the
     facet, for v below the surface and for facets below the horizon (which do not exist).
     """
-    vm = dr.dot(v, m)
+    vm = dot(v, m)
     g1 = dr.minimum(1.0, 2.0 * m.z * v.z / dr.maximum(vm, _TINY))
     return dr.select((vm > 0) & (v.z > 0) & (m.z > 0), g1, 0.0)
 
@@ -136,7 +138,7 @@ def vcavity_g(wi, wo, m):
     there; their mean stands for both, which keeps G symmetric in ωi, ωo to the last bit (with
     ωi·m alone, float32 rounding broke reciprocity by 4e-4 at grazing angles).
     """
-    vm = 0.5 * (dr.dot(wi, m) + dr.dot(wo, m))
+    vm = 0.5 * (dot(wi, m) + dot(wo, m))
     g = dr.minimum(1.0, 2.0 * m.z * dr.minimum(wi.z, wo.z) / dr.maximum(vm, _TINY))
     return dr.select((vm > 0) & (wi.z > 0) & (wo.z > 0), g, 0.0)
 
@@ -179,7 +181,7 @@ def pdf_ndf(d, m):
 
 def pdf_visible(d, g1_wi, wi, m):
     """The density of visible normals of ``wi``: G1(wi, m) |wi·m| D(m) / cosθi (Heitz eq. 2)."""
-    return d * g1_wi * dr.abs(dr.dot(wi, m)) / dr.maximum(wi.z, _TINY)
+    return d * g1_wi * dr.abs(dot(wi, m)) / dr.maximum(wi.z, _TINY)
 
 
 def pdf_visible_reflection(d, g1_wi, wi):
@@ -192,4 +194,4 @@ def pdf_visible_reflection(d, g1_wi, wi):
 
 def reflection_jacobian(wo, m):
     """|∂ωm/∂ωo| = 1 / (4 |ωo·m|) of the reflection ωo = reflect(ωi, m) (Walter eq. 14)."""
-    return 1.0 / dr.maximum(4.0 * dr.abs(dr.dot(wo, m)), _TINY)
+    return 1.0 / dr.maximum(4.0 * dr.abs(dot(wo, m)), _TINY)

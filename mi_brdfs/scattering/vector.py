@@ -1,0 +1,41 @@
+"""
+Three-vectors for the terms, cheap in every variant.
+
+The terms take anything with ``.x``, ``.y``, ``.z``: ``mi.Vector3f`` (JIT variants: the
+components are arrays, and these helpers trace the same operations as ``dr.dot`` and
+``dr.normalize``) or :class:`Vec3` of Python floats (scalar variants, where Mitsuba calls a
+plugin once per ray and an operation on a ``mi.Vector3f`` costs 0.2–3 µs: ``dr.normalize``
+2.8 µs, ``dr.dot`` 0.7 µs, against 0.01 µs for a float product).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import drjit as dr
+
+
+class Vec3(NamedTuple):
+    """A direction of Python floats, for scalar variants."""
+
+    x: float
+    y: float
+    z: float
+
+
+def dot(a, b):
+    """a·b from the components."""
+    return a.x * b.x + a.y * b.y + a.z * b.z
+
+
+def half_vector(wi, wo, vec3):
+    """(ωi + ωo)/‖ωi + ωo‖, built with ``vec3`` (NaN when ωo = −ωi, to be masked)."""
+    hx, hy, hz = wi.x + wo.x, wi.y + wo.y, wi.z + wo.z
+    inv = dr.rsqrt(hx * hx + hy * hy + hz * hz)
+    return vec3(hx * inv, hy * inv, hz * inv)
+
+
+def reflect(wi, m, vec3):
+    """The mirror image 2(ωi·m)m − ωi of ωi about m."""
+    k = 2.0 * dot(wi, m)
+    return vec3(k * m.x - wi.x, k * m.y - wi.y, k * m.z - wi.z)
