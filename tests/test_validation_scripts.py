@@ -14,10 +14,12 @@ def test01_bench_render_quick(tmp_path):
     p = subprocess.run([sys.executable, str(ROOT / "validation" / "bench_render.py"), "--quick",
                         "--json", str(out)], capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
-    assert "| lambert vs diffuse | scalar_rgb |" in p.stdout
+    assert "| lambert vs diffuse | scalar_rgb (" in p.stdout
+    assert "| cooktorrance (Smith) vs roughconductor | llvm_ad_rgb |" in p.stdout
     import json
     rows = json.loads(out.read_text())
-    assert all(r["median_ratio"] > 0 and len(r["plugin_s"]) == r["repeats"] for r in rows)
+    pairs = {r["pair"] for r in rows}
+    assert pairs >= {"lambert vs diffuse", "cooktorrance (Smith) vs roughconductor"}
 
 
 def test02_phong_float32_quick():

@@ -10,5 +10,6 @@ are reported met or missed in the report's summary.
 
 def sections() -> list:
     """The report's sections, in order."""
-    from . import backends, error_time
-    return [backends.section, error_time.section]
+    from . import backends, error_time, models, precision, strategies
+    return [backends.section, error_time.section, strategies.section, models.section,
+            precision.section]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import datetime
 import os
 import platform
+import re
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -164,10 +165,14 @@ def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs va
 
 
 def _per_subject(rows) -> list:
-    """One summary line per subject (the first word of the row's plugin column)."""
+    """
+    One summary line per subject: the first word of the row's plugin column, lower case, without
+    punctuation or hyphens ('Cook-Torrance Smith, α = 0.2' and 'cooktorrance (smith)' are one).
+    """
     subjects: dict[str, list] = {}
     for r in rows:
-        subjects.setdefault(r.plugin.split(" (")[0].split(" ")[0], []).append(r)
+        word = re.split(r"[\s,(]", r.plugin.strip(), maxsplit=1)[0]
+        subjects.setdefault(word.lower().replace("-", ""), []).append(r)
     return [(name, len(rs), sum(r.ok for r in rs),
              sum(r.expected_fail and not r.passed for r in rs),
              sum(not r.ok for r in rs) or "—") for name, rs in subjects.items()]
