@@ -120,12 +120,16 @@ def build() -> type:
     INV_PI = dr.inv_pi
     ALPHA_MIN = mf.ALPHA_MIN
     ALPHA_MIN_32 = float(np.float32(ALPHA_MIN))  # a texture holding 1e-4 holds it in float32
-    ndf, vcavity_g = mf.ndf, mf.vcavity_g
-    smith_g1, smith_g1_mitsuba = mf.smith_g1, mf.smith_g1_mitsuba
+    ndf, vcavity_g, vcavity_g1 = mf.ndf, mf.vcavity_g, mf.vcavity_g1
+    smith_g1_mitsuba = mf.smith_g1_mitsuba
     pdf_visible_reflection, pdf_ndf = mf.pdf_visible_reflection, mf.pdf_ndf
     jacobian = mf.reflection_jacobian
     sample_visible, sample_ndf = mf.sample_visible, mf.sample_ndf
+    sample_vcavity_visible = mf.sample_vcavity_visible
     FRESNEL_TERMS = {"exact": fresnel.exact, "schlick": fresnel.schlick}
+    exact_channels = fresnel.exact_channels
+    reflection_floats = mf.reflection_floats
+    jit = tools.jit
     # Scalar variants: one operation on a colour costs ~0.4 µs, on a Python float ~0.05 µs, so
     # F is computed channel by channel on floats there, from η, k read once when they are
     # constant (spectral variants evaluate them per call: they depend on the wavelengths).
@@ -195,8 +199,8 @@ def build() -> type:
 
          * - sample_visible
            - |bool|
-           - Sample the visible microfacet normals (Heitz & d'Eon 2014) instead of D(m)·cosθm
-             (Walter et al. 2007) (Default: |true|)
+           - Sample the visible microfacet normals of the chosen ``shadowing`` (Heitz & d'Eon
+             2014) instead of D(m)·cosθm (Walter et al. 2007) (Default: |true|)
 
         The model of the lectures, in Walter et al.'s normalisation:
 
@@ -212,15 +216,16 @@ def build() -> type:
         π moved from D into the prefactor, the 4 from the prefactor into D'. ``eval`` returns
         f·cosθo; one-sided (0 below the surface on either side), like ``roughconductor``.
 
-        **Sampling.** A microfacet normal h is drawn from the visible normals of ωi, pdf
-        D·G1(ωi, h)·(ωi·h)/cosθi, or from D(h)·cosθh, and reflected; the pdf of ωo carries the
-        Jacobian 1/(4 ωo·h). The visible-normal pdf needs Smith's G1 whatever G the BRDF uses:
-        with ``smith`` it is Mitsuba's G1 (Walter's rational approximation for Beckmann, within
-        0.35 % of the exact one), so that eval, pdf and the sample weights equal
-        ``roughconductor``'s; with ``vcavity`` it is the exact G1 (erf form), the density the
-        visible normals are actually drawn with. With the diffuse base a lobe is chosen with
-        probabilities proportional to mean(k_s·F(cosθi)) and mean(ρd), and ``pdf`` is the
-        mixture.
+        **Sampling.** A microfacet normal h is drawn from the visible normals of ωi under the
+        model's own masking, pdf D·G1(ωi, h)·(ωi·h)/cosθi, or from D(h)·cosθh, and reflected;
+        the pdf of ωo carries the Jacobian 1/(4 ωo·h). With ``smith`` the visible normals are
+        Smith's (Mitsuba's sampler) and G1 in the pdf is Mitsuba's (Walter's rational
+        approximation for Beckmann, within 0.35 % of the exact one), so that eval, pdf and the
+        sample weights equal ``roughconductor``'s; with ``vcavity`` they are the V-cavity's
+        (Heitz & d'Eon 2014, §5: h from D·cosθh, then one of the two facets of its V-groove
+        by their projected areas), so the sample weight is F·G/G1(ωi) ≤ F. With the diffuse
+        base a lobe is chosen with probabilities proportional to mean(k_s·F(cosθi)) and
+        mean(ρd), and ``pdf`` is the mixture.
 
         **Default Fresnel.** Copper (``material`` = ``Cu``) with the exact formula: Cook and
         Torrance built the model to render metals (their figures are copper vases), a named
@@ -280,6 +285,7 @@ def build() -> type:
             self.m_sample_visible = _common.boolean(props, PLUGIN, "sample_visible", True)
             self._fresnel_term = FRESNEL_TERMS.get(self.m_fresnel)
             self._ior_channels = None  # [(η, k)] per channel, where cached (scalar variants)
+            self._exact_channels = None  # their fresnel.channel_constants, for 'exact'
             self.parameters_changed()
             # Lobe 0 is the microfacet lobe (as roughconductor's only one), lobe 1 the diffuse.
             components = [GLOSSY_FLAGS]
@@ -304,6 +310,8 @@ def build() -> type:
             if term is None:
                 return 1.0
             if self._ior_channels is not None:
+                if self._exact_channels is not None:
+                    return Spectrum(exact_channels(cos_theta, self._exact_channels))
                 return Spectrum([term(cos_theta, e, k) for e, k in self._ior_channels])
             return term(cos_theta, self.m_eta.eval(si, active), self.m_k.eval(si, active))
 
@@ -320,6 +328,18 @@ def build() -> type:
             (f·cosθo, pdf) of the microfacet lobe, for ωi and ωo above the surface (given as
             ``vec3``: components of Python floats in scalar variants).
             """
+            if not jit:  # one call per ray: the same terms, flat, on Python floats
+                if not active:
+                    return Spectrum(0.0), 0.0
+                terms = reflection_floats(self.m_distribution, self.m_shadowing == "smith",
+                                          self.m_sample_visible, self._alpha(si, True), wi, wo)
+                if terms is None:
+                    return Spectrum(0.0), 0.0
+                dg, pdf, cos_im = terms
+                value = self.m_specular_reflectance.eval(si, True) * dg
+                if self._fresnel_term is not None:
+                    value = value * self._fresnel(si, cos_im, True)
+                return value, pdf
             m = half_vector(wi, wo, vec3)
             cos_im = dot(wi, m)
             # Both directions must see the front of the facet: false only when rounding makes
@@ -335,7 +355,7 @@ def build() -> type:
                 G = g1_wi * smith_g1_mitsuba(kind, alpha, wo, m)
             else:
                 G = vcavity_g(wi, wo, m)
-                g1_wi = smith_g1(kind, alpha, wi, m) if self.m_sample_visible else None
+                g1_wi = vcavity_g1(wi, m) if self.m_sample_visible else None
             # f·cosθo = ks F D G / (4 cosθi cosθo) · cosθo
             value = self.m_specular_reflectance.eval(si, active) * (D * G / (4.0 * wi.z))
             if self._fresnel_term is not None:
@@ -379,17 +399,25 @@ def build() -> type:
             p_microfacet = None
             if use_mf:
                 alpha = self._alpha(si, active)
-                if self.m_sample_visible:
+                if use_diffuse:
+                    p_microfacet = self._p_microfacet(si, active)
+                if not self.m_sample_visible:
+                    m = sample_ndf(self.m_distribution, alpha, sample2)
+                elif self.m_shadowing == "smith":
                     m = sample_visible(self.m_distribution, alpha, si.wi, sample2)
                 else:
-                    m = sample_ndf(self.m_distribution, alpha, sample2)
+                    # The facet of the V-groove from sample1; with the diffuse base, sample1
+                    # rescaled to [0, 1) within the microfacet lobe's share of it.
+                    u_facet = sample1 if p_microfacet is None else \
+                        sample1 / dr.maximum(p_microfacet, 1e-30)
+                    m = sample_vcavity_visible(self.m_distribution, alpha, si.wi, sample2,
+                                               u_facet)
                 bs.wo = reflect(si.wi, m)
                 bs.sampled_type, bs.sampled_component = UInt32(GLOSSY), UInt32(0)
             if use_diffuse:
                 wo = cosine_hemisphere(sample2)
                 kind, index = UInt32(DIFFUSE), UInt32(1)
                 if use_mf:  # choose a lobe with sample1
-                    p_microfacet = self._p_microfacet(si, active)
                     pick = sample1 < p_microfacet
                     wo = select(pick, bs.wo, wo)
                     kind = select(pick, bs.sampled_type, kind)
@@ -436,13 +464,16 @@ def build() -> type:
 
         def parameters_changed(self, keys=()):
             """Read η, k once as per-channel floats where that is valid (see constant_ior)."""
-            self._ior_channels = None
+            self._ior_channels = self._exact_channels = None
             if (constant_ior and self._fresnel_term is not None
                     and not self.m_eta.is_spatially_varying()
                     and not self.m_k.is_spatially_varying()):
                 si = mi.SurfaceInteraction3f()
                 eta, k = self.m_eta.eval(si), self.m_k.eval(si)
                 self._ior_channels = [(float(eta[c]), float(k[c])) for c in range(len(eta))]
+                if self.m_fresnel == "exact":
+                    self._exact_channels = [fresnel.channel_constants(e, k)
+                                            for e, k in self._ior_channels]
 
         def to_string(self):
             if self.m_material is not None:

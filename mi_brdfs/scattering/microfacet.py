@@ -34,6 +34,8 @@ and an α already clamped to :data:`ALPHA_MIN`.
 
 from __future__ import annotations
 
+import math
+
 import drjit as dr
 import mitsuba as mi
 
@@ -174,19 +176,46 @@ def sample_visible(kind: str, alpha, wi, u):
     return m
 
 
+def sample_vcavity_visible(kind: str, alpha, wi, u, u_facet):
+    r"""
+    A microfacet normal from the distribution of visible normals of ``wi`` under V-cavity
+    masking, density :func:`pdf_visible` with :func:`vcavity_g1` (Heitz & d'Eon 2014, §5):
+    draw m with density D(m) cosθm (:func:`sample_ndf`, from ``u``); m and its mirror image
+    m' = (−mx, −my, mz) are the two facets of one V-groove; pick m' with probability
+    ⟨ωi·m'⟩ / (⟨ωi·m⟩ + ⟨ωi·m'⟩) (⟨⟩ clamps at 0), decided by ``u_facet`` in [0, 1).
+
+    Why that density: m is reached from m (kept) and from m' (flipped), each drawn with
+    D(m) cosθm, so p(m) = 2 D(m) cosθm ⟨ωi·m⟩ / (⟨ωi·m⟩ + ⟨ωi·m'⟩). Where both facets face
+    ωi the denominator is ωi·m + ωi·m' = 2 cosθm cosθi and p(m) = D(m) (ωi·m) / cosθi
+    (G1 = 1); where m' faces away, p(m) = 2 D(m) cosθm = D(m) (ωi·m) G1(ωi, m) / cosθi with
+    G1 = 2 cosθm cosθi / (ωi·m) < 1. The sample weight of the V-cavity lobe is then
+    F·G/G1(ωi) ≤ F, where the Smith visible normals leave it G_V-cavity/G1_Smith.
+    """
+    m = sample_ndf(kind, alpha, u)
+    kept = dot(wi, m)
+    flipped = 2.0 * wi.z * m.z - kept  # ωi·m'
+    kept_p, flipped_p = dr.maximum(kept, 0.0), dr.maximum(flipped, 0.0)
+    flip = u_facet * dr.maximum(kept_p + flipped_p, _TINY) < flipped_p
+    return mi.Vector3f(dr.select(flip, -m.x, m.x), dr.select(flip, -m.y, m.y), m.z)
+
+
 def pdf_ndf(d, m):
     """The density of :func:`sample_ndf` per unit solid angle of m: D(m) cosθm."""
     return d * m.z
 
 
 def pdf_visible(d, g1_wi, wi, m):
-    """The density of visible normals of ``wi``: G1(wi, m) |wi·m| D(m) / cosθi (Heitz eq. 2)."""
+    """
+    The density of visible normals of ``wi``: G1(wi, m) |wi·m| D(m) / cosθi (Heitz eq. 2), for
+    Smith's G1 (:func:`sample_visible`) or the V-cavity's (:func:`sample_vcavity_visible`).
+    """
     return d * g1_wi * dr.abs(dot(wi, m)) / dr.maximum(wi.z, _TINY)
 
 
 def pdf_visible_reflection(d, g1_wi, wi):
     """
-    The density of ωo = reflect(ωi, m) for m drawn by :func:`sample_visible`: :func:`pdf_visible`
+    The density of ωo = reflect(ωi, m) for m drawn by :func:`sample_visible` or
+    :func:`sample_vcavity_visible` (with their G1): :func:`pdf_visible`
     times :func:`reflection_jacobian`, where |ωi·m| = |ωo·m| cancels: D(m) G1(ωi, m) / (4 cosθi).
     """
     return d * g1_wi / dr.maximum(4.0 * wi.z, _TINY)
@@ -195,3 +224,87 @@ def pdf_visible_reflection(d, g1_wi, wi):
 def reflection_jacobian(wo, m):
     """|∂ωm/∂ωo| = 1 / (4 |ωo·m|) of the reflection ωo = reflect(ωi, m) (Walter eq. 14)."""
     return 1.0 / dr.maximum(4.0 * dr.abs(dot(wo, m)), _TINY)
+
+
+# -- scalar variants ---------------------------------------------------------------------------
+
+def _g1_mitsuba_float(kind: str, alpha: float, vx: float, vy: float, vz: float,
+                      vm: float) -> float:
+    """:func:`smith_g1_mitsuba` on Python floats (``vm`` = v·m)."""
+    if vm * vz <= 0.0:
+        return 0.0
+    ax, ay = alpha * vx, alpha * vy
+    xy = ax * ax + ay * ay
+    if xy == 0.0:
+        return 1.0
+    vz2 = vz * vz
+    t2 = xy / (vz2 if vz2 > _TINY else _TINY)
+    if kind == BECKMANN:
+        a = 1.0 / math.sqrt(t2)
+        if a >= 1.6:
+            return 1.0
+        a2 = a * a
+        return (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2)
+    return 2.0 / (1.0 + math.sqrt(1.0 + t2))
+
+
+def reflection_floats(kind: str, smith: bool, visible: bool, alpha: float, wi, wo):
+    r"""
+    The microfacet reflection lobe for one pair of directions on Python floats, for scalar
+    variants: ``(D·G/(4 cosθi), pdf, ωi·m)`` with m the half vector, or None where the pair
+    sees the back of m. ``smith`` picks Mitsuba's separable G1·G1 (else the V-cavity G),
+    ``visible`` the visible-normal pdf (with the G1 of the same masking) over D·cosθm.
+
+    The same operations as :func:`ndf`, :func:`smith_g1_mitsuba`, :func:`vcavity_g`,
+    :func:`vcavity_g1` and the pdfs above (equal to them to float64 rounding,
+    ``tests/test_microfacet_terms.py``) in one flat function: Mitsuba calls a plugin once per
+    ray in scalar variants, where the per-term function calls and ``dr.`` calls on floats cost
+    more than the arithmetic (10.6 µs against 3 µs for this function).
+    """
+    hx, hy, hz = wi.x + wo.x, wi.y + wo.y, wi.z + wo.z
+    h2 = hx * hx + hy * hy + hz * hz
+    if not h2 > 0.0:  # ωo = −ωi: no half vector (NaN in the JIT terms, masked there)
+        return None
+    inv = 1.0 / math.sqrt(h2)
+    mx, my, mz = hx * inv, hy * inv, hz * inv
+    cos_im = wi.x * mx + wi.y * my + wi.z * mz
+    cos_om = wo.x * mx + wo.y * my + wo.z * mz
+    if not (cos_im > 0.0 and cos_om > 0.0):
+        return None
+    # D
+    cos2 = mz * mz
+    sx, sy = mx / alpha, my / alpha
+    slope2 = sx * sx + sy * sy
+    a2 = alpha * alpha
+    if kind == BECKMANN:
+        den = math.pi * a2 * (cos2 * cos2)
+        d = math.exp(-slope2 / (cos2 if cos2 > _TINY else _TINY)) / \
+            (den if den > _TINY else _TINY)
+    else:
+        q = slope2 + cos2
+        den = math.pi * a2 * (q * q)
+        d = 1.0 / (den if den > _TINY else _TINY)
+    if not d * mz > D_COS_MIN:
+        d = 0.0
+    # G, and G1(ωi) for the visible-normal pdf
+    if smith:
+        g1_wi = _g1_mitsuba_float(kind, alpha, wi.x, wi.y, wi.z, cos_im)
+        g = g1_wi * _g1_mitsuba_float(kind, alpha, wo.x, wo.y, wo.z, cos_om)
+    else:
+        vm = 0.5 * (cos_im + cos_om)
+        if vm > 0.0 and wi.z > 0.0 and wo.z > 0.0:
+            g = 2.0 * mz * min(wi.z, wo.z) / (vm if vm > _TINY else _TINY)
+            g = 1.0 if g > 1.0 else g
+        else:
+            g = 0.0
+        g1_wi = 0.0
+        if visible and cos_im > 0.0 and wi.z > 0.0 and mz > 0.0:
+            g1_wi = 2.0 * mz * wi.z / (cos_im if cos_im > _TINY else _TINY)
+            g1_wi = 1.0 if g1_wi > 1.0 else g1_wi
+    four_cos_i = 4.0 * wi.z
+    if visible:
+        pdf = d * g1_wi / (four_cos_i if four_cos_i > _TINY else _TINY)
+    else:
+        j = 4.0 * abs(cos_om)
+        pdf = d * mz * (1.0 / (j if j > _TINY else _TINY))
+    return d * g / four_cos_i, pdf, cos_im
