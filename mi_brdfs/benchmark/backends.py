@@ -38,6 +38,11 @@ PAIRS = [
          {"metal": "roughconductor"}),
     Pair("cooktorrance (V-cavity) vs roughconductor", "metalbox", {"metal": "cooktorrance"},
          {"metal": "roughconductor"}, target=False),
+    # What the glossy lobe costs: Phong (ρd = 0.8 and its defaults ks = 0.2, n = 30) against
+    # lambert (ρ = 0.8), both plugins, in the white furnace; "built-in" is lambert here.
+    Pair("phong vs lambert (furnace)", "furnace",
+         {"material": "phong", "reflectance_name": "diffuse_reflectance", "reflectance": "0.8"},
+         {"material": "lambert", "reflectance": "0.8"}, target=False),
 ]
 
 
@@ -162,7 +167,9 @@ def section(ctx: Context) -> Section:
     many = many_materials(ctx, s)
     s.markdown = "\n".join([
         "Render time with every surface (Cornell box: `scenes/cbox.xml`) or every metal "
-        "(`scenes/metalbox.xml`) the plugin, against the built-in, same spp and seeds, medians "
+        "(`scenes/metalbox.xml`) the plugin, against the built-in (for Phong: against "
+        "`lambert`, both plugins, in the white furnace `scenes/furnace.xml`, which prices its "
+        "glossy lobe), same spp and seeds, medians "
         "of interleaved repeats in one process. In the JIT variant both go through `mi.render`, "
         "after a first render each that traces and compiles (its time is the last column); in "
         "the scalar variant through the package's render path `mi_brdfs.render.render`, which "

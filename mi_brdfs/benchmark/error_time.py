@@ -125,7 +125,7 @@ def section(ctx: Context) -> Section:
     s = Section("Error against time")
     res = ctx.n(64, 24)
     spps = [2 ** k for k in range(ctx.n(7, 4))]       # 1 … 64 (quick: 1 … 8)
-    repeats = ctx.n(5, 2)
+    repeats = ctx.n(15, 2)
     reference_spp = 16 * spps[-1]
     pairs = PAIRS if not ctx.quick else PAIRS[:2]
     table, curves = [], {}

@@ -129,7 +129,7 @@ def section(ctx: Context) -> Section:
     s = Section("Model choices")
     rows = []
     for label, a, b in CHOICES:
-        sample = label.startswith("visible")
+        sample = label.endswith("(sample)")
         ta, tb, ratio = jit_cost(a, b, ctx, sample=sample)
         sa, sb, sratio = scalar_cost(a, b, ctx) if not sample else (math.nan,) * 3
         rows.append((label, "sample()" if sample else "eval_pdf()", f"{ta:.3f} s", f"{tb:.3f} s",

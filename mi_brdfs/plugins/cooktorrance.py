@@ -393,6 +393,8 @@ def build() -> type:
         def sample(self, ctx, si, sample1, sample2, active=True):
             bs = new_sample()
             lobes = use_mf, use_diffuse = self._lobes(ctx)
+            if not jit and use_mf and not use_diffuse:
+                return self._sample_scalar(si, sample1, sample2, active, bs)
             active = active & (si.wi.z > 0)
             if none(active) or not (use_mf or use_diffuse):
                 return bs, Spectrum(0.0)
@@ -428,6 +430,34 @@ def build() -> type:
             bs.pdf = pdf
             ok = active & (pdf > 0)
             return bs, select(ok, value / select(ok, pdf, 1.0), 0.0)
+
+        def _sample_scalar(self, si, sample1, sample2, active, bs):
+            """
+            :meth:`sample` of the microfacet lobe alone in scalar variants: the same steps on
+            Python floats where they are cheaper than Mitsuba's scalar types (a call per ray;
+            every attribute of a Mitsuba object read or written costs 0.1–0.4 µs there).
+            """
+            wi = as_vec3(si.wi)
+            if not (active and wi.z > 0):
+                return bs, Spectrum(0.0)
+            alpha = self._alpha(si, True)
+            if not self.m_sample_visible:
+                m = sample_ndf(self.m_distribution, alpha, sample2)
+            elif self.m_shadowing == "smith":
+                m = sample_visible(self.m_distribution, alpha, si.wi, sample2)
+            else:
+                m = sample_vcavity_visible(self.m_distribution, alpha, si.wi, sample2, sample1)
+            mx, my, mz = m
+            k = 2.0 * (wi.x * mx + wi.y * my + wi.z * mz)
+            wo = mi.Vector3f(k * mx - wi.x, k * my - wi.y, k * mz - wi.z)
+            bs.wo, bs.eta = wo, 1.0
+            bs.sampled_type, bs.sampled_component = GLOSSY, 0
+            wo = as_vec3(wo)  # the direction as stored, so that weight = eval/pdf at bs.wo
+            if not wo.z > 0:
+                return bs, Spectrum(0.0)
+            value, pdf = self._microfacet(si, wi, wo, True)
+            bs.pdf = pdf
+            return bs, (depolarize(value) / pdf if pdf > 0 else Spectrum(0.0))
 
         def eval(self, ctx, si, wo, active=True):
             lobes = self._lobes(ctx)
