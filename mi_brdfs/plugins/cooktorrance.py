@@ -403,17 +403,11 @@ def build() -> type:
                 alpha = self._alpha(si, active)
                 if use_diffuse:
                     p_microfacet = self._p_microfacet(si, active)
-                if not self.m_sample_visible:
-                    m = sample_ndf(self.m_distribution, alpha, sample2)
-                elif self.m_shadowing == "smith":
-                    m = sample_visible(self.m_distribution, alpha, si.wi, sample2)
-                else:
-                    # The facet of the V-groove from sample1; with the diffuse base, sample1
-                    # rescaled to [0, 1) within the microfacet lobe's share of it.
-                    u_facet = sample1 if p_microfacet is None else \
-                        sample1 / dr.maximum(p_microfacet, 1e-30)
-                    m = sample_vcavity_visible(self.m_distribution, alpha, si.wi, sample2,
-                                               u_facet)
+                # With the diffuse base, sample1 chose the lobe: rescaled to [0, 1) within the
+                # microfacet lobe's share, it still picks the V-cavity's facet.
+                u_facet = sample1 if p_microfacet is None else \
+                    sample1 / dr.maximum(p_microfacet, 1e-30)
+                m = self._sample_normal(si, alpha, sample2, u_facet)
                 bs.wo = reflect(si.wi, m)
                 bs.sampled_type, bs.sampled_component = UInt32(GLOSSY), UInt32(0)
             if use_diffuse:
@@ -431,6 +425,15 @@ def build() -> type:
             ok = active & (pdf > 0)
             return bs, select(ok, value / select(ok, pdf, 1.0), 0.0)
 
+        def _sample_normal(self, si, alpha, sample2, u_facet):
+            """A microfacet normal: D·cosθ, Smith's visible normals, or the V-cavity's (whose
+            facet of the V-groove ``u_facet`` picks)."""
+            if not self.m_sample_visible:
+                return sample_ndf(self.m_distribution, alpha, sample2)
+            if self.m_shadowing == "smith":
+                return sample_visible(self.m_distribution, alpha, si.wi, sample2)
+            return sample_vcavity_visible(self.m_distribution, alpha, si.wi, sample2, u_facet)
+
         def _sample_scalar(self, si, sample1, sample2, active, bs):
             """
             :meth:`sample` of the microfacet lobe alone in scalar variants: the same steps on
@@ -440,14 +443,7 @@ def build() -> type:
             wi = as_vec3(si.wi)
             if not (active and wi.z > 0):
                 return bs, Spectrum(0.0)
-            alpha = self._alpha(si, True)
-            if not self.m_sample_visible:
-                m = sample_ndf(self.m_distribution, alpha, sample2)
-            elif self.m_shadowing == "smith":
-                m = sample_visible(self.m_distribution, alpha, si.wi, sample2)
-            else:
-                m = sample_vcavity_visible(self.m_distribution, alpha, si.wi, sample2, sample1)
-            mx, my, mz = m
+            mx, my, mz = self._sample_normal(si, self._alpha(si, True), sample2, sample1)
             k = 2.0 * (wi.x * mx + wi.y * my + wi.z * mz)
             wo = mi.Vector3f(k * mx - wi.x, k * my - wi.y, k * mz - wi.z)
             bs.wo, bs.eta = wo, 1.0

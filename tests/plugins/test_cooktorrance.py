@@ -141,6 +141,11 @@ def test05_smith_equals_roughconductor(variants_all, np_rng, visible, distributi
     a, b = eval_pdf(ours, wi, wo), eval_pdf(theirs, wi, wo)
     for x, y, what in zip(a, b, ("eval", "pdf", "eval_pdf value", "eval_pdf pdf")):
         assert_rel(x, y, 1e-5, what=what)
+    if visible and mi.variant() == "llvm_ad_rgb":
+        # the same operations in the same order (vector.dot's fused multiply-adds as dr.dot's):
+        # separate products and sums made these 1.8e-6 apart
+        np.testing.assert_array_equal(a[1], b[1])
+        assert_rel(a[0], b[0], 1e-6, what="eval")
     vcavity = eval_pdf(mi.load_dict(dict(common, type=CT)), wi, wo)[0]
     with pytest.raises(AssertionError):
         assert_rel(vcavity, b[0], 1e-3)
