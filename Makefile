@@ -44,7 +44,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(VENV)/bin/mi-brdfs bench --out validation
 
-# The validation campaign: validation/REPORT.md and validation/figures/ (about 15 min)
+# The validation campaign: validation/REPORT.md and validation/figures/ (about 3 min)
 validate: $(STAMP)
 	$(VENV)/bin/mi-brdfs validate --out validation
 

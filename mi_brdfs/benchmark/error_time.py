@@ -43,6 +43,11 @@ PAIRS = [
 #: Scenes: the showcase (every sphere the contender) and the white furnace (its sphere).
 SCENES = {"showcase": {f"{i}-material" for i in SHOWCASE_IDS}, "furnace": {"material"}}
 
+#: Image side per scene (full, quick). The furnace renders ~20× faster per pixel: at the
+#: showcase's 64² its renders took 3–15 ms, and one noisy repeat moved identical kernels
+#: (lambert, diffuse) 13 % apart.
+RES = {"showcase": (64, 24), "furnace": (256, 24)}
+
 #: Target of issue #7: time to 1 % relative RMSE at most 1.05 × the built-in's.
 TARGET = 1.05
 
@@ -123,13 +128,13 @@ def plot(rows_by_pair, path) -> str:
 
 def section(ctx: Context) -> Section:
     s = Section("Error against time")
-    res = ctx.n(64, 24)
     spps = [2 ** k for k in range(ctx.n(7, 4))]       # 1 … 64 (quick: 1 … 8)
     repeats = ctx.n(15, 2)
     reference_spp = 16 * spps[-1]
     pairs = PAIRS if not ctx.quick else PAIRS[:2]
     table, curves = [], {}
     for scene_name in SCENES:
+        res = ctx.n(*RES[scene_name])
         for label, ours, builtin, targeted in pairs:
             rows, refs = measure(scene_name, {"plugin": ours, "built-in": builtin}, spps, res,
                                  repeats, reference_spp)
@@ -153,7 +158,8 @@ def section(ctx: Context) -> Section:
     s.markdown = "\n".join([
         f"Each plugin and its built-in counterpart in the showcase (`scenes/showcase.xml`, every "
         f"sphere's material swapped for the contender) and in the white furnace "
-        f"(`scenes/furnace.xml`), {res}×{res}, `{ctx.variant}`, at spp = "
+        f"(`scenes/furnace.xml`), "
+        f"{' and '.join(f'{ctx.n(*r)}²' for r in RES.values())} pixels, `{ctx.variant}`, at spp = "
         f"{', '.join(map(str, spps))}; each time is the median of {repeats} interleaved "
         "renders in one process, after a warm-up render that holds the JIT compilation. Each "
         f"contender's error is against its own render at {reference_spp} spp (so it is noise "
