@@ -270,7 +270,7 @@ def test10b_vcavity_weights_at_most_f(variant_llvm_ad_rgb, np_rng):
     """
     The V-cavity visible normals make the sample weight F·G/G1_V(ωi) ≤ F (= 1 here), and exactly
     1 where neither direction is masked; Smith's visible normals under the V-cavity G (what the
-    plugin sampled before) give weights G_V/G1_Smith up to 1.3 at grazing incidence.
+    plugin sampled before) give weights G_V/G1_Smith above 1.05 near grazing incidence.
     """
     n = 50_000
     wi = random_directions(np_rng, n, lower=False)
