@@ -343,7 +343,8 @@ def _jit_variant(what: str) -> str:
     return variant
 
 
-def _run_report(args, sections, what: str, **kwargs) -> int:
+def _run_report(args, sections, what: str, **kwargs) -> list:
+    """Run a report's sections and print its verdict; the rows that are not as expected."""
     from .campaign import Context, run
 
     out = _report_folder(args, kwargs.get("filename", "REPORT.md"))

@@ -253,3 +253,18 @@ def test27_check_equal_rejects_a_different_bsdf(jit):
     assert checks.check_equal("lambert", "diffuse", n=10_000, rtol=0, atol=0).passed
     result = checks.check_equal("lambert reflectance=0.5", "diffuse reflectance=0.6", n=10_000)
     assert not result.passed and result.value == pytest.approx(1 / 6, rel=1e-5)
+
+
+def test28_rotation_to_equator():
+    """The χ² rotation is a proper rotation taking the lobe's direction to (1, 0, 0), ±x too."""
+    from mi_brdfs.checks.sampling import rotation_to_equator
+
+    rng = np.random.default_rng(5)
+    dirs = [[1, 0, 0], [-1, 0, 0], [0, 0, 1], [0, 0, -1], [0.3, -0.2, 0.9],
+            *rng.normal(size=(20, 3))]
+    for d in dirs:
+        d = np.asarray(d, dtype=float)
+        R = rotation_to_equator(d)
+        np.testing.assert_allclose(R @ (d / np.linalg.norm(d)), [1, 0, 0], atol=1e-12)
+        np.testing.assert_allclose(R.T @ R, np.eye(3), atol=1e-12)
+        assert np.linalg.det(R) == pytest.approx(1.0)

@@ -1,5 +1,6 @@
 """The validation scripts run (quick mode), so they cannot rot between campaigns."""
 
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -20,6 +21,8 @@ def test01_bench_render_quick(tmp_path):
     rows = json.loads(out.read_text())
     pairs = {r["pair"] for r in rows}
     assert pairs >= {"lambert vs diffuse", "cooktorrance (Smith) vs roughconductor"}
+    ratios = [float(r["ratio"].rstrip("×")) for r in rows]
+    assert all(math.isfinite(x) and x > 0 for x in ratios), ratios
 
 
 def test02_phong_float32_quick():

@@ -76,7 +76,7 @@ def section(ctx: Context) -> Section:
         ax.legend(fontsize=7)
     axes[0].set_ylabel("99th percentile of |f32 − f64| / f64")
     fig.suptitle("float32 eval against the float64 reference at the directions the BSDF "
-                 "samples (dotted: 1e-3)", fontsize=9)
+                 f"samples (dotted: {BREAK:g})", fontsize=9)
     path = _save(fig, ctx.figure("extremes_precision.png"))
     s.markdown = "\n".join([
         "Each plugin with one parameter swept to its extremes. For every value: the stability "

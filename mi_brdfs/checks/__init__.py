@@ -17,7 +17,6 @@ check                      what it establishes
 ``check_stability``        no NaN/Inf/negative at stress directions × parameter extremes
 ``check_furnace``          the white furnace render equals what E(θ) predicts, no NaN pixel
 ``check_equal``            two BSDFs agree pointwise (eval, pdf, sample): a plugin = a built-in
-``check_precision``        float32 eval follows the model's float64 reference (sampled directions)
 ``check_ndf``              ∫ D cosθ dω = 1 (microfacet terms)
 ``check_weak_furnace``     Heitz's weak white furnace = 1 (microfacet D and G1)
 =========================  ========================================================================
@@ -29,7 +28,7 @@ from .battery import format_table, run_battery
 from .consistency import check_consistency
 from .furnace import FurnaceRender, check_furnace, furnace_render
 from .pointwise import check_equal
-from .precision import check_precision, eval_precision
+from .precision import eval_precision
 from .microfacet import (check_ndf, check_weak_furnace, mitsuba_terms, ndf_normalization,
                          package_terms, weak_white_furnace)
 from .reciprocity import check_positivity, check_reciprocity, reciprocity
@@ -44,5 +43,5 @@ __all__ = [
     "sweep_one", "check_furnace", "furnace_render", "FurnaceRender", "check_ndf",
     "check_weak_furnace", "ndf_normalization", "weak_white_furnace", "mitsuba_terms",
     "package_terms",
-    "run_battery", "format_table", "check_equal", "check_precision", "eval_precision",
+    "run_battery", "format_table", "check_equal", "eval_precision",
 ]

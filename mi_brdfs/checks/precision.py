@@ -13,9 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..bsdfspec import describe, load_bsdf
+from ..bsdfspec import load_bsdf
 from . import _batch
-from .result import CheckResult
 
 #: Incident angles (degrees) at which the lobe is sampled.
 THETAS = (0.0, 45.0, 80.0)
@@ -68,16 +67,3 @@ def eval_precision(spec, n: int | None = None, seed: int = 0, thetas=THETAS) -> 
     e = np.where(np.isfinite(e), e, np.inf)
     return Precision(spec, float(np.median(e)), float(np.percentile(e, 99)), float(e.max()),
                      int(e.size))
-
-
-def check_precision(spec, tolerance: float = BREAK, **kwargs) -> CheckResult:
-    """Passes when the 99th percentile of the relative error is within ``tolerance``."""
-    p = eval_precision(spec, **kwargs)
-    if p is None:
-        return CheckResult("precision", True, float("nan"), tolerance,
-                           f"precision: {describe(spec)}: no float64 reference", skipped=True)
-    passed = p.p99 <= tolerance
-    msg = (f"precision: {describe(spec)}: float32 eval vs float64 reference over {p.count} "
-           f"sampled directions: median {p.median:.2g}, 99th percentile {p.p99:.2g}, "
-           f"max {p.max:.2g} ({'≤' if passed else '>'} {tolerance:g})")
-    return CheckResult("precision", passed, p.p99, tolerance, msg, details={"precision": p})

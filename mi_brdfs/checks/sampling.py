@@ -171,8 +171,11 @@ def chi2_bsdf(bsdf, wi=(0.0, 0.0, 1.0), ctx=None, res: int | None = 101, ires: i
                                skipped=True)
         ctx = mi.BSDFContext(mi.TransportMode.Radiance, smooth)
         note = " (non-delta lobes only)"
-    auto_res, auto_ires, pdf_max, lobe = chi2_settings(obj, wi, ctx)
-    res, ires = res or auto_res, ires or auto_ires
+    if rotate or res is None or ires is None:  # the pilot samples are needed
+        auto_res, auto_ires, pdf_max, lobe = chi2_settings(obj, wi, ctx)
+        res, ires = res or auto_res, ires or auto_ires
+    else:
+        pdf_max, lobe = 0.0, np.array([0.0, 0.0, 1.0])
     # Only a sharp lobe near a pole is moved: a wide one reaches the horizon, where the pdf
     # jumps to 0, and that edge is best left on the equator, aligned with the cells (rotated,
     # α = 1 at normal incidence is rejected, p ≈ 1e-16, unrotated p = 0.18).

@@ -17,6 +17,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import Description, ParameterError
+from ..scattering.vector import Vec3
 
 # -------------------------------------------------------------------------------------------------
 # Variant primitives
@@ -33,8 +34,6 @@ def variant_tools() -> SimpleNamespace:
     matters: ``dr.select`` on a Spectrum and ``dr.zeros(BSDFSample3f)`` cost about 1 µs each
     there, a Python conditional and the (zero-initialised) default constructor 0.1 µs.
     """
-    from ..scattering.vector import Vec3
-
     jit = dr.is_jit_v(mi.Float)
     if jit:
         select = dr.select

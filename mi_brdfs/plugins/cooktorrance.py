@@ -17,6 +17,7 @@ from ..errors import ParameterError
 from ..scattering import fresnel
 from ..scattering import microfacet as mf
 from ..scattering.vector import dot, half_vector
+from ..scattering.vector import reflect as reflect_vec
 from . import _common
 
 PLUGIN = "cooktorrance"
@@ -284,8 +285,7 @@ def build() -> type:
             #: Sample visible normals (else D·cosθ).
             self.m_sample_visible = _common.boolean(props, PLUGIN, "sample_visible", True)
             self._fresnel_term = FRESNEL_TERMS.get(self.m_fresnel)
-            self._ior_channels = None  # [(η, k)] per channel, where cached (scalar variants)
-            self._exact_channels = None  # their fresnel.channel_constants, for 'exact'
+            self._fresnel_floats = None  # cosθ → [F per channel], where cached (scalar variants)
             self.parameters_changed()
             # Lobe 0 is the microfacet lobe (as roughconductor's only one), lobe 1 the diffuse.
             components = [GLOSSY_FLAGS]
@@ -309,10 +309,8 @@ def build() -> type:
             term = self._fresnel_term
             if term is None:
                 return 1.0
-            if self._ior_channels is not None:
-                if self._exact_channels is not None:
-                    return Spectrum(exact_channels(cos_theta, self._exact_channels))
-                return Spectrum([term(cos_theta, e, k) for e, k in self._ior_channels])
+            if self._fresnel_floats is not None:
+                return Spectrum(self._fresnel_floats(cos_theta))
             return term(cos_theta, self.m_eta.eval(si, active), self.m_k.eval(si, active))
 
         def _p_microfacet(self, si, active):
@@ -367,7 +365,8 @@ def build() -> type:
             return select(active, value, 0.0), select(active, pdf, 0.0)
 
         def _eval_pdf(self, si, wo, active, lobes, p_microfacet=None):
-            """f·cosθo and the pdf of ``sample()`` at ``wo``; the only place with the maths."""
+            """f·cosθo and the pdf of ``sample()`` at ``wo``: the lobes and their mixture (the
+            microfacet terms are in :meth:`_microfacet`, which sample() also calls)."""
             use_mf, use_diffuse = lobes
             wi, wo = as_vec3(si.wi), as_vec3(wo)
             cos_theta_i, cos_theta_o = wi.z, wo.z
@@ -443,9 +442,8 @@ def build() -> type:
             wi = as_vec3(si.wi)
             if not (active and wi.z > 0):
                 return bs, Spectrum(0.0)
-            mx, my, mz = self._sample_normal(si, self._alpha(si, True), sample2, sample1)
-            k = 2.0 * (wi.x * mx + wi.y * my + wi.z * mz)
-            wo = mi.Vector3f(k * mx - wi.x, k * my - wi.y, k * mz - wi.z)
+            m = as_vec3(self._sample_normal(si, self._alpha(si, True), sample2, sample1))
+            wo = reflect_vec(wi, m, mi.Vector3f)
             bs.wo, bs.eta = wo, 1.0
             bs.sampled_type, bs.sampled_component = GLOSSY, 0
             wo = as_vec3(wo)  # the direction as stored, so that weight = eval/pdf at bs.wo
@@ -490,16 +488,19 @@ def build() -> type:
 
         def parameters_changed(self, keys=()):
             """Read η, k once as per-channel floats where that is valid (see constant_ior)."""
-            self._ior_channels = self._exact_channels = None
+            self._fresnel_floats = None
             if (constant_ior and self._fresnel_term is not None
                     and not self.m_eta.is_spatially_varying()
                     and not self.m_k.is_spatially_varying()):
                 si = mi.SurfaceInteraction3f()
                 eta, k = self.m_eta.eval(si), self.m_k.eval(si)
-                self._ior_channels = [(float(eta[c]), float(k[c])) for c in range(len(eta))]
+                channels = [(float(eta[c]), float(k[c])) for c in range(len(eta))]
                 if self.m_fresnel == "exact":
-                    self._exact_channels = [fresnel.channel_constants(e, k)
-                                            for e, k in self._ior_channels]
+                    consts = [fresnel.channel_constants(e, k) for e, k in channels]
+                    self._fresnel_floats = lambda c: exact_channels(c, consts)
+                else:
+                    term = self._fresnel_term
+                    self._fresnel_floats = lambda c: [term(c, e, k) for e, k in channels]
 
         def to_string(self):
             if self.m_material is not None:

@@ -93,18 +93,18 @@ class Phong:
         the surface, times the Jacobian 4 ωo·H of the halfway lobe.
         """
         ci, si = math.cos(theta), math.sin(theta)
-        k = 0 if self.form == "original" else 1  # original: f cosθo = ks cosⁿα (L = ωo)
+        projected = self.form != "original"  # original: f cosθo = ks cosⁿα (L = ωo)
         if self.lobe == "mirror":
             # cosθo = a + b cos φ about R (R at angle θ)
             a, b = cos_a * ci, sin_a * si
-            phi0 = _arc(a, b, 0.0)
-            return 2 * phi0 if k == 0 else 2 * (a * phi0 + b * np.sin(phi0))
+            phi0 = _arc(a, b)
+            return 2 * (a * phi0 + b * np.sin(phi0)) if projected else 2 * phi0
         # H at angle a to N: ωi·H = a + b cos φ, cosθo = 2(ωi·H) cos a − cos θ > 0 on the arc
         a, b = ci * cos_a, si * sin_a
-        phi0 = _arc(2 * cos_a * a - ci, 2 * cos_a * b, 0.0)
+        phi0 = _arc(2 * cos_a * a - ci, 2 * cos_a * b)
         s, c = np.sin(phi0), np.cos(phi0)
         first = 2 * a * phi0 + 2 * b * s                                   # ∫ (a + b cos φ)
-        if k == 0:
+        if not projected:
             return 4 * first
         second = 2 * a * a * phi0 + 4 * a * b * s + b * b * (phi0 + s * c)  # ∫ (a + b cos φ)²
         return 4 * (2 * cos_a * second - ci * first)
@@ -115,7 +115,7 @@ class Phong:
             return [math.pi / 2 - theta]
         return [(math.pi / 2 - theta) / 2, (math.pi / 2 + theta) / 2]
 
-    def specular_albedo(self, theta: float, nodes: int = NODES) -> float:
+    def specular_albedo(self, theta: float) -> float:
         """E(θ) of the specular part with ks = 1."""
         if math.cos(theta) <= 0:
             return 0.0
@@ -123,7 +123,7 @@ class Phong:
         # u = cos^(n+1)(angle): the kinks in u, ascending (large angles give small u)
         cuts = sorted({min(max(math.cos(a), 0.0) ** n1, 1.0) for a in self._kinks(theta)
                        if 0 < a < math.pi / 2})
-        x, w = gauss_legendre(nodes)
+        x, w = gauss_legendre(NODES)
         x, w = 0.5 * (x + 1), 0.5 * w
         # u = lo + (hi − lo)·x²(3 − 2x): du/dx vanishes at both ends, which smooths the kinks
         # and the u^(1/(n+1)) behaviour at u = 0 for Gauss-Legendre
@@ -145,9 +145,8 @@ class Phong:
         return self.rho_d + self.k_s * self.specular_albedo(theta)
 
 
-def _arc(a, b, threshold):
-    """φ0 ∈ [0, π] with a + b cos φ > threshold exactly for |φ| < φ0 (b ≥ 0)."""
+def _arc(a, b):
+    """φ0 ∈ [0, π] with a + b cos φ > 0 exactly for |φ| < φ0 (b ≥ 0)."""
     b = np.asarray(b, dtype=np.float64)
-    ratio = np.where(b > 0, (threshold - a) / np.where(b > 0, b, 1.0),
-                     np.where(a > threshold, -np.inf, np.inf))
+    ratio = np.where(b > 0, -a / np.where(b > 0, b, 1.0), np.where(a > 0, -np.inf, np.inf))
     return np.arccos(np.clip(ratio, -1.0, 1.0))
