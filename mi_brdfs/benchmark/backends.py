@@ -114,6 +114,50 @@ def scalar_threads(ctx: Context) -> list:
     return rows
 
 
+#: BSDFs whose calls the scalar per-call profile times (the metal of the metalbox pair: Au).
+CALLS = [("lambert", {"type": "lambert"}), ("diffuse", {"type": "diffuse"}),
+         ("cooktorrance (Smith)", {"type": "cooktorrance", "shadowing": "smith",
+                                   "material": "Au", "alpha": 0.2}),
+         ("roughconductor", {"type": "roughconductor", "material": "Au", "alpha": 0.2})]
+
+
+def scalar_calls(ctx: Context) -> list:
+    """
+    µs per call from Python of eval_pdf and sample (what Mitsuba calls per path vertex) of each
+    of :data:`CALLS`, and of cooktorrance's float arithmetic alone (the lobe's terms and the
+    exact Fresnel of three channels: the least any call of it has to compute), interleaved.
+    """
+    from ..bsdfspec import load_bsdf
+    from ..scattering import fresnel
+    from ..scattering import microfacet as mf
+    from ..scattering.vector import Vec3
+    mi_brdfs.use_variant(ctx.scalar_variant)
+    try:
+        n = ctx.n(20_000, 1_000)
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(0.3, 0.2, 0.932738)
+        wo, c, u = mi.Vector3f(0.1, 0.4, 0.910465), mi.BSDFContext(), mi.Point2f(0.3, 0.6)
+        calls = {}
+        for label, spec in CALLS:
+            b = load_bsdf(spec)
+            calls[(label, "eval_pdf")] = lambda b=b: [b.eval_pdf(c, si, wo) for _ in range(n)]
+            calls[(label, "sample")] = lambda b=b: [b.sample(c, si, 0.4, u) for _ in range(n)]
+        wi_, wo_ = Vec3(0.3, 0.2, 0.932738), Vec3(0.1, 0.4, 0.910465)
+        consts = [fresnel.channel_constants(e, k) for e, k in
+                  ((0.143, 3.983), (0.375, 2.386), (1.442, 1.603))]
+
+        def arithmetic():
+            for _ in range(n):
+                mf.reflection_floats("beckmann", True, True, 0.2, wi_, wo_)
+                fresnel.exact_channels(0.9, consts)
+        calls[("cooktorrance (Smith)", "its arithmetic alone")] = arithmetic
+        times = interleaved(calls, repeats=ctx.n(5, 2))
+        return [(label, call, f"{median(t) / n * 1e6:.2f} µs")
+                for (label, call), t in times.items()]
+    finally:
+        mi_brdfs.use_variant(ctx.variant)
+
+
 #: (label, the plugin's material dict given index i of K, the built-in's)
 INSTANCES = [
     ("lambert vs diffuse",
@@ -164,6 +208,7 @@ def section(ctx: Context) -> Section:
     s = Section("Backends")
     table = jit_ratios(ctx, s) + scalar_ratios(ctx, s)
     threads = scalar_threads(ctx)
+    calls = scalar_calls(ctx)
     many = many_materials(ctx, s)
     s.markdown = "\n".join([
         "Render time with every surface (Cornell box: `scenes/cbox.xml`) or every metal "
@@ -180,6 +225,13 @@ def section(ctx: Context) -> Section:
         "ray from its render threads, and those calls serialise on the GIL "
         f"(Cornell box, in-process `mi.render`, {ctx.scalar_variant}):", "",
         md_table(["material", "render threads", "time"], threads), "",
+        "What the scalar ratios are made of: Mitsuba calls `eval_pdf` (towards the sampled "
+        "light) and `sample` once each per path vertex. Time per call from Python (one call "
+        f"from C++ costs about the same), {ctx.scalar_variant}, medians of interleaved repeats; "
+        "the last row is the least cooktorrance has to compute per call: D, the two G1, the pdf "
+        "and the exact Fresnel of three channels on Python floats, nothing read from or written "
+        "to Mitsuba objects:", "",
+        md_table(["BSDF", "call", "time per call"], calls), "",
         "Trace overhead per BSDF instance (JIT): K spheres, each with its own material "
         "instance (a different parameter value). Every Python instance is traced into the "
         "kernel once per render; the first render also compiles:", "",

@@ -43,10 +43,11 @@ PAIRS = [
 #: Scenes: the showcase (every sphere the contender) and the white furnace (its sphere).
 SCENES = {"showcase": {f"{i}-material" for i in SHOWCASE_IDS}, "furnace": {"material"}}
 
-#: Image side per scene (full, quick). The furnace renders ~20× faster per pixel: at the
-#: showcase's 64² its renders took 3–15 ms, and one noisy repeat moved identical kernels
-#: (lambert, diffuse) 13 % apart.
-RES = {"showcase": (64, 24), "furnace": (256, 24)}
+#: Image side per scene (full, quick), large enough that renders take tens to hundreds of ms:
+#: the furnace at 64² rendered in 3–15 ms and the showcase at 64² in 10–80 ms, where one
+#: noisy repeat moved identical kernels (lambert and diffuse; Smith cooktorrance and
+#: roughconductor, the same image) 6–13 % apart on a shared 2-core machine.
+RES = {"showcase": (128, 24), "furnace": (256, 24)}
 
 #: Target of issue #7: time to 1 % relative RMSE at most 1.05 × the built-in's.
 TARGET = 1.05

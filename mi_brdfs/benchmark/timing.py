@@ -27,20 +27,47 @@ def timed(fn: Callable) -> tuple[float, object]:
     return time.perf_counter() - t0, result
 
 
-def interleaved(contenders: dict[str, Callable], repeats: int = 5,
-                warmup: int = 1) -> dict[str, list[float]]:
+def kernel_timed(fn: Callable) -> tuple[float, float]:
+    """
+    (tracing, kernels): the seconds ``fn`` takes to build its JIT arrays (Python tracing the
+    computation: a fixed cost per launch), and the execution time of the kernels that then
+    evaluate its result (DrJit's kernel history: the cost that grows with the number of
+    lanes). JIT variants only; ``fn`` returns its arrays unevaluated.
+    """
+    import drjit as dr
+    flag = dr.JitFlag.KernelHistory
+    was = dr.flag(flag)
+    dr.set_flag(flag, True)
+    try:
+        sync()
+        dr.kernel_history()  # drops what earlier calls recorded
+        t0 = time.perf_counter()
+        result = fn()
+        tracing = time.perf_counter() - t0
+        dr.eval(result)
+        sync()
+        kernels = sum(k.get("execution_time", 0.0) for k in dr.kernel_history()) * 1e-3
+    finally:
+        dr.set_flag(flag, was)
+    return tracing, kernels
+
+
+def interleaved(contenders: dict[str, Callable], repeats: int = 5, warmup: int = 1,
+                timer: Callable | None = None) -> dict[str, list]:
     """
     Seconds per call of each contender, ``repeats`` times, in alternating order after
-    ``warmup`` untimed rounds (which hold JIT tracing and compilation).
+    ``warmup`` untimed rounds (which hold JIT tracing and compilation). ``timer`` (default:
+    wall seconds of :func:`timed`) measures one call; :func:`kernel_timed` splits it.
     """
+    timer = timer or (lambda fn: timed(fn)[0])
     names = list(contenders)
     for _ in range(warmup):
         for name in names:
-            timed(contenders[name])
-    times: dict[str, list[float]] = {name: [] for name in names}
+            timer(contenders[name])
+    times: dict[str, list] = {name: [] for name in names}
     for r in range(repeats):
         for name in (names if r % 2 == 0 else names[::-1]):
-            times[name].append(timed(contenders[name])[0])
+            times[name].append(timer(contenders[name]))
     return times
 
 

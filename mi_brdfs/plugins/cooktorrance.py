@@ -123,6 +123,7 @@ def build() -> type:
     ALPHA_MIN_32 = float(np.float32(ALPHA_MIN))  # a texture holding 1e-4 holds it in float32
     ndf, vcavity_g, vcavity_g1 = mf.ndf, mf.vcavity_g, mf.vcavity_g1
     smith_g1_mitsuba = mf.smith_g1_mitsuba
+    ndf_lean, smith_g1_lean = mf.ndf_lean, mf.smith_g1_lean
     pdf_visible_reflection, pdf_ndf = mf.pdf_visible_reflection, mf.pdf_ndf
     jacobian = mf.reflection_jacobian
     sample_visible, sample_ndf = mf.sample_visible, mf.sample_ndf
@@ -132,9 +133,10 @@ def build() -> type:
     reflection_floats = mf.reflection_floats
     jit = tools.jit
     # Scalar variants: one operation on a colour costs ~0.4 µs, on a Python float ~0.05 µs, so
-    # F is computed channel by channel on floats there, from η, k read once when they are
-    # constant (spectral variants evaluate them per call: they depend on the wavelengths).
-    constant_ior = not tools.jit and not mi.is_spectral
+    # the lobe is computed channel by channel on floats there, from α, ks, η and k read once
+    # when they are constant (spectral variants evaluate them per call: they depend on the
+    # wavelengths).
+    flat_ok = not tools.jit and not mi.is_spectral
     DIFFERENTIABLE = mi.ParamFlags.Differentiable
     DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
 
@@ -285,7 +287,10 @@ def build() -> type:
             #: Sample visible normals (else D·cosθ).
             self.m_sample_visible = _common.boolean(props, PLUGIN, "sample_visible", True)
             self._fresnel_term = FRESNEL_TERMS.get(self.m_fresnel)
-            self._fresnel_floats = None  # cosθ → [F per channel], where cached (scalar variants)
+            #: (α, [ks per channel], cosθ → [F per channel] or None, Mitsuba's visible-normal
+            #: sampler for α) where the parameters are constant in a scalar variant (see
+            #: flat_ok), else None.
+            self._flat = None
             self.parameters_changed()
             # Lobe 0 is the microfacet lobe (as roughconductor's only one), lobe 1 the diffuse.
             components = [GLOSSY_FLAGS]
@@ -309,8 +314,6 @@ def build() -> type:
             term = self._fresnel_term
             if term is None:
                 return 1.0
-            if self._fresnel_floats is not None:
-                return Spectrum(self._fresnel_floats(cos_theta))
             return term(cos_theta, self.m_eta.eval(si, active), self.m_k.eval(si, active))
 
         def _p_microfacet(self, si, active):
@@ -321,47 +324,73 @@ def build() -> type:
             total = ws + wd
             return select(total > 0, ws / select(total > 0, total, 1.0), 1.0)
 
-        def _microfacet(self, si, wi, wo, active):
+        def _microfacet(self, si, wi, wo, active, weight=False):
             """
             (f·cosθo, pdf) of the microfacet lobe, for ωi and ωo above the surface (given as
             ``vec3``: components of Python floats in scalar variants).
+
+            With ``weight`` (for :meth:`sample`): (f·cosθo/pdf, pdf); in JIT variants the weight
+            in closed form, where D and 4 cosθi cancel: ks·F·G1(ωo) (Smith's visible normals),
+            ks·F·G/G1(ωi) (the V-cavity's), ks·F·G·(ωo·m)/(cosθi cosθm) (D·cos); and D and
+            Smith's G1 in their forms with fewer divisions (:func:`~mi_brdfs.scattering.
+            microfacet.ndf_lean`), equal to eval's and pdf's to float32 rounding.
             """
             if not jit:  # one call per ray: the same terms, flat, on Python floats
                 if not active:
                     return Spectrum(0.0), 0.0
+                flat = self._flat
+                alpha = flat[0] if flat is not None else self._alpha(si, True)
                 terms = reflection_floats(self.m_distribution, self.m_shadowing == "smith",
-                                          self.m_sample_visible, self._alpha(si, True), wi, wo)
+                                          self.m_sample_visible, alpha, wi, wo)
                 if terms is None:
                     return Spectrum(0.0), 0.0
                 dg, pdf, cos_im = terms
+                if weight:
+                    dg = dg / pdf if pdf > 0.0 else 0.0
+                if flat is not None:  # ks·F·factor per channel, one colour built
+                    ks, fresnel_floats = flat[1], flat[2]
+                    if fresnel_floats is None:
+                        return Spectrum(*[k * dg for k in ks]), pdf
+                    return Spectrum(*[k * f * dg for k, f in
+                                      zip(ks, fresnel_floats(cos_im))]), pdf
                 value = self.m_specular_reflectance.eval(si, True) * dg
                 if self._fresnel_term is not None:
                     value = value * self._fresnel(si, cos_im, True)
                 return value, pdf
             m = half_vector(wi, wo, vec3)
-            cos_im = dot(wi, m)
+            cos_im, cos_om = dot(wi, m), dot(wo, m)
             # Both directions must see the front of the facet: false only when rounding makes
             # ωi + ωo vanish (grazing, nearly opposite directions).
-            active = active & (cos_im > 0) & (dot(wo, m) > 0)
+            active = active & (cos_im > 0) & (cos_om > 0)
             if none(active):
                 return Spectrum(0.0), Float(0.0)
             kind = self.m_distribution
             alpha = self._alpha(si, active)
-            D = ndf(kind, alpha, m)
+            D = (ndf_lean if weight else ndf)(kind, alpha, m)
             if self.m_shadowing == "smith":
-                g1_wi = smith_g1_mitsuba(kind, alpha, wi, m)
-                G = g1_wi * smith_g1_mitsuba(kind, alpha, wo, m)
+                g1 = smith_g1_lean if weight else smith_g1_mitsuba
+                g1_wi, g1_wo = g1(kind, alpha, wi, m), g1(kind, alpha, wo, m)
+                G = g1_wi * g1_wo
             else:
                 G = vcavity_g(wi, wo, m)
                 g1_wi = vcavity_g1(wi, m) if self.m_sample_visible else None
-            # f·cosθo = ks F D G / (4 cosθi cosθo) · cosθo
-            value = self.m_specular_reflectance.eval(si, active) * (D * G / (4.0 * wi.z))
-            if self._fresnel_term is not None:
-                value = value * self._fresnel(si, cos_im, active)
             if self.m_sample_visible:
                 pdf = pdf_visible_reflection(D, g1_wi, wi)
             else:
                 pdf = pdf_ndf(D, m) * jacobian(wo, m)
+            if not weight:  # f·cosθo = ks F D G / (4 cosθi cosθo) · cosθo
+                factor = D * G / (4.0 * wi.z)
+            elif not self.m_sample_visible:
+                factor = G * cos_om / dr.maximum(wi.z * m.z, 1e-30)
+            elif self.m_shadowing == "smith":
+                factor = g1_wo
+            else:
+                factor = G / dr.maximum(g1_wi, 1e-30)
+            if weight:
+                active = active & (pdf > 0)
+            value = self.m_specular_reflectance.eval(si, active) * factor
+            if self._fresnel_term is not None:
+                value = value * self._fresnel(si, cos_im, active)
             return select(active, value, 0.0), select(active, pdf, 0.0)
 
         def _eval_pdf(self, si, wo, active, lobes, p_microfacet=None):
@@ -392,8 +421,10 @@ def build() -> type:
         def sample(self, ctx, si, sample1, sample2, active=True):
             bs = new_sample()
             lobes = use_mf, use_diffuse = self._lobes(ctx)
-            if not jit and use_mf and not use_diffuse:
-                return self._sample_scalar(si, sample1, sample2, active, bs)
+            if use_mf and not use_diffuse:
+                if not jit:
+                    return self._sample_scalar(si, sample1, sample2, active, bs)
+                return self._sample_microfacet(si, sample1, sample2, active, bs)
             active = active & (si.wi.z > 0)
             if none(active) or not (use_mf or use_diffuse):
                 return bs, Spectrum(0.0)
@@ -424,12 +455,32 @@ def build() -> type:
             ok = active & (pdf > 0)
             return bs, select(ok, value / select(ok, pdf, 1.0), 0.0)
 
+        def _sample_microfacet(self, si, sample1, sample2, active, bs):
+            """
+            :meth:`sample` of the microfacet lobe alone in JIT variants: its terms at the half
+            vector of ``bs.wo`` as stored (so that bs.pdf = pdf(bs.wo) and weight =
+            eval/pdf to float32 rounding), with the weight in closed form
+            (:meth:`_microfacet`).
+            """
+            wi = si.wi
+            active = active & (wi.z > 0)
+            m = self._sample_normal(si, self._alpha(si, active), sample2, sample1)
+            bs.wo = reflect(wi, m)
+            bs.sampled_type, bs.sampled_component = UInt32(GLOSSY), UInt32(0)
+            bs.eta = 1.0
+            active = active & (bs.wo.z > 0)
+            weight, pdf = self._microfacet(si, as_vec3(wi), as_vec3(bs.wo), active, weight=True)
+            bs.pdf = pdf
+            return bs, select(active, depolarize(weight), 0.0)
+
         def _sample_normal(self, si, alpha, sample2, u_facet):
             """A microfacet normal: D·cosθ, Smith's visible normals, or the V-cavity's (whose
             facet of the V-groove ``u_facet`` picks)."""
             if not self.m_sample_visible:
                 return sample_ndf(self.m_distribution, alpha, sample2)
             if self.m_shadowing == "smith":
+                if self._flat is not None:  # scalar: Mitsuba's sampler, built once
+                    return self._flat[3].sample(si.wi, sample2)[0]
                 return sample_visible(self.m_distribution, alpha, si.wi, sample2)
             return sample_vcavity_visible(self.m_distribution, alpha, si.wi, sample2, u_facet)
 
@@ -442,16 +493,17 @@ def build() -> type:
             wi = as_vec3(si.wi)
             if not (active and wi.z > 0):
                 return bs, Spectrum(0.0)
-            m = as_vec3(self._sample_normal(si, self._alpha(si, True), sample2, sample1))
+            alpha = self._flat[0] if self._flat is not None else self._alpha(si, True)
+            m = as_vec3(self._sample_normal(si, alpha, sample2, sample1))
             wo = reflect_vec(wi, m, mi.Vector3f)
             bs.wo, bs.eta = wo, 1.0
             bs.sampled_type, bs.sampled_component = GLOSSY, 0
             wo = as_vec3(wo)  # the direction as stored, so that weight = eval/pdf at bs.wo
             if not wo.z > 0:
                 return bs, Spectrum(0.0)
-            value, pdf = self._microfacet(si, wi, wo, True)
+            weight, pdf = self._microfacet(si, wi, wo, True, weight=True)
             bs.pdf = pdf
-            return bs, (depolarize(value) / pdf if pdf > 0 else Spectrum(0.0))
+            return bs, depolarize(weight)
 
         def eval(self, ctx, si, wo, active=True):
             lobes = self._lobes(ctx)
@@ -487,20 +539,28 @@ def build() -> type:
                 cb.put("diffuse_reflectance", self.m_diffuse_reflectance, DIFFERENTIABLE)
 
         def parameters_changed(self, keys=()):
-            """Read η, k once as per-channel floats where that is valid (see constant_ior)."""
-            self._fresnel_floats = None
-            if (constant_ior and self._fresnel_term is not None
-                    and not self.m_eta.is_spatially_varying()
-                    and not self.m_k.is_spatially_varying()):
-                si = mi.SurfaceInteraction3f()
+            """Read α, ks, η and k once as per-channel floats where that is valid (flat_ok)."""
+            self._flat = None
+            textures = [self.m_alpha, self.m_specular_reflectance]
+            if self._fresnel_term is not None:
+                textures += [self.m_eta, self.m_k]
+            if not flat_ok or any(t.is_spatially_varying() for t in textures):
+                return
+            si = mi.SurfaceInteraction3f()
+            alpha = max(float(self.m_alpha.eval_1(si)), ALPHA_MIN)
+            ks = [float(c) for c in self.m_specular_reflectance.eval(si)]
+            fresnel_floats = None
+            if self._fresnel_term is not None:
                 eta, k = self.m_eta.eval(si), self.m_k.eval(si)
                 channels = [(float(eta[c]), float(k[c])) for c in range(len(eta))]
                 if self.m_fresnel == "exact":
                     consts = [fresnel.channel_constants(e, k) for e, k in channels]
-                    self._fresnel_floats = lambda c: exact_channels(c, consts)
+                    fresnel_floats = lambda c: exact_channels(c, consts)  # noqa: E731
                 else:
                     term = self._fresnel_term
-                    self._fresnel_floats = lambda c: [term(c, e, k) for e, k in channels]
+                    fresnel_floats = lambda c: [term(c, e, k) for e, k in channels]  # noqa: E731
+            distr = mi.MicrofacetDistribution(mf.mitsuba_type(self.m_distribution), alpha, True)
+            self._flat = (alpha, ks, fresnel_floats, distr)
 
         def to_string(self):
             if self.m_material is not None:
