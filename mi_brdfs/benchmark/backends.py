@@ -128,6 +128,7 @@ def scalar_calls(ctx: Context) -> list:
     exact Fresnel of three channels: the least any call of it has to compute), interleaved.
     """
     from ..bsdfspec import load_bsdf
+    from ..plugins.cooktorrance import conductor_ior
     from ..scattering import fresnel
     from ..scattering import microfacet as mf
     from ..scattering.vector import Vec3
@@ -143,8 +144,7 @@ def scalar_calls(ctx: Context) -> list:
             calls[(label, "eval_pdf")] = lambda b=b: [b.eval_pdf(c, si, wo) for _ in range(n)]
             calls[(label, "sample")] = lambda b=b: [b.sample(c, si, 0.4, u) for _ in range(n)]
         wi_, wo_ = Vec3(0.3, 0.2, 0.932738), Vec3(0.1, 0.4, 0.910465)
-        consts = [fresnel.channel_constants(e, k) for e, k in
-                  ((0.143, 3.983), (0.375, 2.386), (1.442, 1.603))]
+        consts = [fresnel.channel_constants(e, k) for e, k in zip(*conductor_ior("Au"))]
 
         def arithmetic():
             for _ in range(n):

@@ -15,6 +15,7 @@ import mi_brdfs
 from ..bsdfspec import load_bsdf
 from ..campaign.core import Context, Row, Section, md_table
 from ..checks import _batch
+from ..plugins.cooktorrance import conductor_ior
 from ..reference import cooktorrance as ref
 from .timing import interleaved, median, median_ratio
 
@@ -116,8 +117,8 @@ def fresnel_error() -> list:
     rows = []
     cos = np.cos(np.radians(np.linspace(0, 89.9, 900)))
     for label, eta, k in (("glass η 1.5", 1.5, 0.0), ("water η 1.33", 1.33, 0.0),
-                          ("gold (RGB)", [0.143, 0.375, 1.442], [3.983, 2.386, 1.603]),
-                          ("aluminium (RGB)", [1.658, 0.880, 0.521], [9.224, 6.270, 4.837])):
+                          ("gold (RGB)", *conductor_ior("Au")),
+                          ("aluminium (RGB)", *conductor_ior("Al"))):
         err = np.abs(ref.fresnel_schlick(cos, eta, k) - ref.fresnel_exact(cos, eta, k))
         e_exact = ref.CookTorrance(alpha=0.2, eta=eta, k=k).albedo(math.radians(75.0))
         e_schlick = ref.CookTorrance(alpha=0.2, eta=eta, k=k, fresnel="schlick").albedo(

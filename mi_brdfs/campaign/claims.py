@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 
-import mitsuba as mi
 import numpy as np
 
 from .. import checks
@@ -113,15 +112,12 @@ def glass(ctx: Context, s: Section) -> tuple[str, str]:
 
 def conductors(ctx: Context, s: Section) -> str:
     """Schlick for metals: R0 from η, k, against the exact conductor Fresnel term."""
-    from ..plugins.cooktorrance import _material_ior
+    from ..plugins.cooktorrance import conductor_ior
 
     cos = np.cos(np.radians(np.linspace(0, 90, 361)))
     rows = []
-    si = _batch.interaction([0, 0, 1])
     for name in ("Au", "Ag", "Cu", "Al", "Cr"):
-        eta_t, k_t = _material_ior(name)
-        eta = np.array(mi.unpolarized_spectrum(eta_t.eval(si)), dtype=np.float64).ravel()
-        k = np.array(mi.unpolarized_spectrum(k_t.eval(si)), dtype=np.float64).ravel()
+        eta, k = conductor_ior(name)
         exact = ref.fresnel_exact(cos, eta, k)
         schlick = ref.fresnel_schlick(cos, eta, k)
         err = np.abs(schlick - exact)

@@ -94,5 +94,5 @@ def section(ctx: Context) -> Section:
         "limited by the half-vector of two float32 directions. For Cook-Torrance, η → 1 is a "
         "limit of the *parameter*, not of the arithmetic: float32 cannot hold η closer to 1 "
         "than 1.2e-7, and F ∝ (η − 1)² there, so the relative error of a vanishing "
-        "reflectance grows while its absolute error stays below 1e-12."])
+        "reflectance grows while the reflectance itself goes to 0."])
     return s

@@ -17,6 +17,7 @@ from ..errors import ParameterError
 from ..scattering import fresnel
 from ..scattering import microfacet as mf
 from ..scattering.vector import dot, half_vector
+from ..scattering.vector import Vec3, round_f32
 from ..scattering.vector import reflect as reflect_vec
 from . import _common
 
@@ -60,6 +61,19 @@ def _material_ior(name):
 
     mi.load_dict({"type": "roughconductor", "material": name}).traverse(Collect())
     return found["eta"], found["k"]
+
+
+def conductor_ior(name: str, si=None):
+    """
+    (η, k) of a named conductor as float64 arrays, one value per channel of the current
+    variant, the values ``cooktorrance`` and ``roughconductor`` use: RGB variants 3, mono 1,
+    spectral ones the measured data at the wavelengths of ``si`` (give one there: a default
+    ``mi.SurfaceInteraction3f()`` has wavelengths 0, outside the data, where η = k = 0).
+    """
+    eta, k = _material_ior(name)
+    si = si if si is not None else mi.SurfaceInteraction3f()
+    return tuple(np.array(mi.unpolarized_spectrum(t.eval(si)), dtype=np.float64).ravel()
+                 for t in (eta, k))
 
 
 def _constant_channels(props, name) -> list[float] | None:
@@ -437,7 +451,7 @@ def build() -> type:
                 # microfacet lobe's share, it still picks the V-cavity's facet.
                 u_facet = sample1 if p_microfacet is None else \
                     sample1 / dr.maximum(p_microfacet, 1e-30)
-                m = self._sample_normal(si, alpha, sample2, u_facet)
+                m = self._sample_normal(si.wi, alpha, sample2, u_facet)
                 bs.wo = reflect(si.wi, m)
                 bs.sampled_type, bs.sampled_component = UInt32(GLOSSY), UInt32(0)
             if use_diffuse:
@@ -464,7 +478,7 @@ def build() -> type:
             """
             wi = si.wi
             active = active & (wi.z > 0)
-            m = self._sample_normal(si, self._alpha(si, active), sample2, sample1)
+            m = self._sample_normal(wi, self._alpha(si, active), sample2, sample1)
             bs.wo = reflect(wi, m)
             bs.sampled_type, bs.sampled_component = UInt32(GLOSSY), UInt32(0)
             bs.eta = 1.0
@@ -473,16 +487,16 @@ def build() -> type:
             bs.pdf = pdf
             return bs, select(active, depolarize(weight), 0.0)
 
-        def _sample_normal(self, si, alpha, sample2, u_facet):
-            """A microfacet normal: D·cosθ, Smith's visible normals, or the V-cavity's (whose
-            facet of the V-groove ``u_facet`` picks)."""
+        def _sample_normal(self, wi, alpha, sample2, u_facet):
+            """A microfacet normal: D·cosθ, Smith's visible normals of ``wi``, or the
+            V-cavity's (whose facet of the V-groove ``u_facet`` picks)."""
             if not self.m_sample_visible:
                 return sample_ndf(self.m_distribution, alpha, sample2)
             if self.m_shadowing == "smith":
                 if self._flat is not None:  # scalar: Mitsuba's sampler, built once
-                    return self._flat[3].sample(si.wi, sample2)[0]
-                return sample_visible(self.m_distribution, alpha, si.wi, sample2)
-            return sample_vcavity_visible(self.m_distribution, alpha, si.wi, sample2, u_facet)
+                    return self._flat[3].sample(wi, sample2)[0]
+                return sample_visible(self.m_distribution, alpha, wi, sample2)
+            return sample_vcavity_visible(self.m_distribution, alpha, wi, sample2, u_facet)
 
         def _sample_scalar(self, si, sample1, sample2, active, bs):
             """
@@ -490,15 +504,15 @@ def build() -> type:
             Python floats where they are cheaper than Mitsuba's scalar types (a call per ray;
             every attribute of a Mitsuba object read or written costs 0.1–0.4 µs there).
             """
-            wi = as_vec3(si.wi)
+            w = si.wi
+            wi = as_vec3(w)
             if not (active and wi.z > 0):
                 return bs, Spectrum(0.0)
             alpha = self._flat[0] if self._flat is not None else self._alpha(si, True)
-            m = as_vec3(self._sample_normal(si, alpha, sample2, sample1))
-            wo = reflect_vec(wi, m, mi.Vector3f)
-            bs.wo, bs.eta = wo, 1.0
-            bs.sampled_type, bs.sampled_component = GLOSSY, 0
-            wo = as_vec3(wo)  # the direction as stored, so that weight = eval/pdf at bs.wo
+            m = as_vec3(self._sample_normal(w, alpha, sample2, sample1))
+            # the direction as bs.wo stores it (float32), so that weight = eval/pdf at bs.wo
+            wo = round_f32(reflect_vec(wi, m, Vec3))
+            bs.wo, bs.eta, bs.sampled_type = mi.Vector3f(*wo), 1.0, GLOSSY  # component: 0
             if not wo.z > 0:
                 return bs, Spectrum(0.0)
             weight, pdf = self._microfacet(si, wi, wo, True, weight=True)

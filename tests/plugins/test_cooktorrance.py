@@ -459,6 +459,21 @@ def test19_named_conductors_are_roughconductors(variants_all):
     assert {"Au", "Ag", "Al", "Cu", "Cr"} <= set(conductor_names())
 
 
+def test19b_conductor_ior_is_the_materials(variants_rgb, np_rng):
+    """conductor_ior (the benchmark's and the campaign's η, k) given as eta, k renders the
+    lobe of material = Au; aluminium's values would not."""
+    from mi_brdfs.plugins.cooktorrance import conductor_ior
+    wi, wo = random_directions(np_rng, 200, lower=False), random_directions(np_rng, 200)
+    named = eval_pdf(mi.load_dict({"type": CT, "material": "Au"}), wi, wo)[0]
+    for metal in ("Au", "Al"):
+        eta, k = conductor_ior(metal)
+        assert eta.shape == k.shape == (3,)
+        given = eval_pdf(mi.load_dict({"type": CT, "eta": {"type": "rgb", "value": eta.tolist()},
+                                       "k": {"type": "rgb", "value": k.tolist()}}), wi, wo)[0]
+        close = np.allclose(given, named, rtol=1e-6, atol=1e-9)
+        assert close == (metal == "Au"), metal
+
+
 # -- rendering and differentiation ------------------------------------------------------------
 
 @pytest.mark.parametrize("distribution", ["beckmann", "ggx"])
