@@ -144,7 +144,9 @@ def scalar_calls(ctx: Context) -> list:
             calls[(label, "eval_pdf")] = lambda b=b: [b.eval_pdf(c, si, wo) for _ in range(n)]
             calls[(label, "sample")] = lambda b=b: [b.sample(c, si, 0.4, u) for _ in range(n)]
         wi_, wo_ = Vec3(0.3, 0.2, 0.932738), Vec3(0.1, 0.4, 0.910465)
-        consts = [fresnel.channel_constants(e, k) for e, k in zip(*conductor_ior("Au"))]
+        # Python floats, as the plugin holds them (NumPy scalars would be 2× slower here)
+        consts = [fresnel.channel_constants(float(e), float(k))
+                  for e, k in zip(*conductor_ior("Au"))]
 
         def arithmetic():
             for _ in range(n):

@@ -23,7 +23,7 @@ from . import _batch
 from .result import CheckResult
 
 #: Relative tolerance of the comparisons: float32 arithmetic in a few dozen operations. Our
-#: plugins compute sample, eval and pdf through one code path (≈1e-7); Mitsuba's roughconductor
+#: plugins compute sample, eval and pdf from the same terms (≈1e-7–2e-6); Mitsuba's roughconductor
 #: reaches 2e-6 (its sample() and pdf() evaluate D and G1 separately).
 RTOL = 1e-3
 

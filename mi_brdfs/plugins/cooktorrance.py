@@ -313,7 +313,7 @@ def build() -> type:
             self.m_components = components  # a copy crosses to C++: assign, don't append
             self.m_flags = GLOSSY_FLAGS | (DIFFUSE_FLAGS if len(components) > 1 else 0)
 
-        # -- the maths: one code path for eval, pdf, eval_pdf and sample --------------------
+        # -- the maths: the same terms for eval, pdf, eval_pdf and sample ------------------
 
         def _lobes(self, ctx):
             """Which lobes the context enables: (microfacet, diffuse)."""

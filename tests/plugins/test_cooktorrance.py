@@ -157,7 +157,7 @@ def test06_samples_equal_roughconductors(variant_llvm_ad_rgb, np_rng, distributi
     With visible normals both draw with Mitsuba's sampler: the same directions bit for bit, and
     our weight and bs.pdf equal roughconductor's eval/pdf there (1e-5). roughconductor's own
     sample() weight departs from its eval/pdf by up to 1e-3 at cosθ < 0.01 (it reuses the
-    sampled normal where pdf() recomputes the half vector); ours is eval/pdf by construction.
+    sampled normal where pdf() recomputes the half vector); ours is eval/pdf at the stored bs.wo.
     """
     common = dict(material="Cu", alpha=0.25, distribution=distribution)
     ours = mi.load_dict(dict(common, type=CT, shadowing="smith"))
