@@ -41,3 +41,17 @@ def test03_cooktorrance_report_quick():
                         "--quick"], capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
     assert "| beckmann | V-cavity |" in p.stdout and "no NaN, Inf or negative" in p.stdout
+
+
+
+def test04_profile_kernels_quick():
+    """validation/profile_kernels.py --quick: a row per contender, with its kernel time and a
+    division count read from the kernel's IR (every one of these kernels divides)."""
+    p = subprocess.run([sys.executable, str(ROOT / "validation" / "profile_kernels.py"),
+                        "--quick"], capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    rows = [line.rsplit("  ", 1)[0].split() for line in p.stdout.splitlines() if " ms " in line]
+    assert len(rows) == 4, p.stdout
+    for row in rows:
+        kernels, fdiv = float(row[-6]), int(row[-1])
+        assert kernels > 0 and fdiv > 0, p.stdout
