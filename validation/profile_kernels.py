@@ -21,16 +21,7 @@ from collections import Counter
 
 import mi_brdfs  # first: it chooses the libLLVM before drjit loads
 
-import drjit as dr  # noqa: E402
 
-CONTENDERS = {
-    "cooktorrance smith, visible normals": {"type": "cooktorrance", "shadowing": "smith",
-                                            "fresnel": "none", "alpha": 0.2},
-    "roughconductor, visible normals": {"type": "roughconductor", "alpha": 0.2},
-    "cooktorrance smith, D·cos": {"type": "cooktorrance", "shadowing": "smith",
-                                  "fresnel": "none", "alpha": 0.2, "sample_visible": False},
-    "roughconductor, D·cos": {"type": "roughconductor", "alpha": 0.2, "sample_visible": False},
-}
 
 
 def ops(ir: str) -> Counter:
@@ -45,26 +36,25 @@ def main(argv=None) -> None:
     p.add_argument("--quick", action="store_true", help="a smoke run: 1e4 samples, 2 repeats")
     args = p.parse_args(argv)
     mi_brdfs.use_variant("llvm_ad_rgb")
-    from mi_brdfs.benchmark.strategies import _draws, own
-    from mi_brdfs.benchmark.timing import interleaved, kernel_timed
+    from mi_brdfs.benchmark.strategies import LOBES, _draws, own
+    from mi_brdfs.benchmark.timing import interleaved, kernel_timed, traced_kernels
     from mi_brdfs.bsdfspec import load_bsdf
 
+    # the Smith lobe of the benchmark's strategies, the plugin's and the built-in's samplers
+    _, ours, builtins = next(lobe for lobe in LOBES if "Smith" in lobe[0])
+    contenders = {f"{who}, {sampler}": spec for who, specs in
+                  (("cooktorrance smith", ours), ("roughconductor", builtins))
+                  for sampler, spec in specs.items()}
     n = 10_000 if args.quick else 2_000_000
     draws = _draws(math.radians(45.0), n, seed=0)
-    bsdfs = {k: load_bsdf(v) for k, v in CONTENDERS.items()}
+    bsdfs = {k: load_bsdf(v) for k, v in contenders.items()}
     times = interleaved({k: (lambda b=b: own(b, *draws)) for k, b in bsdfs.items()},
                         repeats=2 if args.quick else 15, timer=kernel_timed)
     print(f"sample() of {n} directions at 45° incidence, llvm_ad_rgb, medians of interleaved "
           "repeats")
     print(f"{'':40s} {'kernels':>9s} {'tracing':>9s} {'ops':>5s} {'fdiv':>5s}  other")
-    flag = dr.JitFlag.KernelHistory
     for name, b in bsdfs.items():
-        dr.set_flag(flag, True)
-        dr.kernel_history()
-        dr.eval(own(b, *draws))
-        dr.sync_thread()
-        history = dr.kernel_history()
-        dr.set_flag(flag, False)
+        _, history = traced_kernels(lambda b=b: own(b, *draws))
         count = Counter()
         for k in history:
             ir = k["ir"].getvalue() if hasattr(k["ir"], "getvalue") else str(k["ir"])

@@ -27,12 +27,12 @@ def timed(fn: Callable) -> tuple[float, object]:
     return time.perf_counter() - t0, result
 
 
-def kernel_timed(fn: Callable) -> tuple[float, float]:
+def traced_kernels(fn: Callable) -> tuple[float, list]:
     """
     (tracing, kernels): the seconds ``fn`` takes to build its JIT arrays (Python tracing the
-    computation: a fixed cost per launch), and the execution time of the kernels that then
-    evaluate its result (DrJit's kernel history: the cost that grows with the number of
-    lanes). JIT variants only; ``fn`` returns its arrays unevaluated.
+    computation: a fixed cost per launch), and DrJit's kernel-history records of the kernels
+    that then evaluate its result (execution time in ms, IR, operation count). JIT variants
+    only; ``fn`` returns its arrays unevaluated.
     """
     import drjit as dr
     flag = dr.JitFlag.KernelHistory
@@ -46,10 +46,17 @@ def kernel_timed(fn: Callable) -> tuple[float, float]:
         tracing = time.perf_counter() - t0
         dr.eval(result)
         sync()
-        kernels = sum(k.get("execution_time", 0.0) for k in dr.kernel_history()) * 1e-3
+        kernels = dr.kernel_history()
     finally:
         dr.set_flag(flag, was)
     return tracing, kernels
+
+
+def kernel_timed(fn: Callable) -> tuple[float, float]:
+    """(tracing, kernels) seconds of :func:`traced_kernels`: the kernels' execution time, the
+    cost that grows with the number of lanes."""
+    tracing, kernels = traced_kernels(fn)
+    return tracing, sum(k.get("execution_time", 0.0) for k in kernels) * 1e-3
 
 
 def interleaved(contenders: dict[str, Callable], repeats: int = 5, warmup: int = 1,

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Callable, NamedTuple
 
 import drjit as dr
 import mitsuba as mi
@@ -118,6 +119,15 @@ def _read_ior(props, needed: bool):
     return eta, k, None
 
 
+class _Flat(NamedTuple):
+    """cooktorrance's constant parameters as Python floats, for scalar variants."""
+
+    alpha: float                 # clamped to ALPHA_MIN
+    ks: list                     # specular_reflectance per channel
+    fresnel: Callable | None     # cosθ → [F per channel]; None for fresnel = none
+    sampler: object              # mi.MicrofacetDistribution(α) for Smith's visible normals
+
+
 def build() -> type:
     """Define the ``cooktorrance`` plugin class on the current variant's ``mi.BSDF``."""
     tools = _common.variant_tools()
@@ -137,7 +147,6 @@ def build() -> type:
     ALPHA_MIN_32 = float(np.float32(ALPHA_MIN))  # a texture holding 1e-4 holds it in float32
     ndf, vcavity_g, vcavity_g1 = mf.ndf, mf.vcavity_g, mf.vcavity_g1
     smith_g1_mitsuba = mf.smith_g1_mitsuba
-    ndf_lean, smith_g1_lean = mf.ndf_lean, mf.smith_g1_lean
     pdf_visible_reflection, pdf_ndf = mf.pdf_visible_reflection, mf.pdf_ndf
     jacobian = mf.reflection_jacobian
     sample_visible, sample_ndf = mf.sample_visible, mf.sample_ndf
@@ -301,8 +310,7 @@ def build() -> type:
             #: Sample visible normals (else D·cosθ).
             self.m_sample_visible = _common.boolean(props, PLUGIN, "sample_visible", True)
             self._fresnel_term = FRESNEL_TERMS.get(self.m_fresnel)
-            #: (α, [ks per channel], cosθ → [F per channel] or None, Mitsuba's visible-normal
-            #: sampler for α) where the parameters are constant in a scalar variant (see
+            #: The constant parameters as floats in a scalar variant (:class:`_Flat`, see
             #: flat_ok), else None.
             self._flat = None
             self.parameters_changed()
@@ -343,17 +351,16 @@ def build() -> type:
             (f·cosθo, pdf) of the microfacet lobe, for ωi and ωo above the surface (given as
             ``vec3``: components of Python floats in scalar variants).
 
-            With ``weight`` (for :meth:`sample`): (f·cosθo/pdf, pdf); in JIT variants the weight
-            in closed form, where D and 4 cosθi cancel: ks·F·G1(ωo) (Smith's visible normals),
-            ks·F·G/G1(ωi) (the V-cavity's), ks·F·G·(ωo·m)/(cosθi cosθm) (D·cos); and D and
-            Smith's G1 in their forms with fewer divisions (:func:`~mi_brdfs.scattering.
-            microfacet.ndf_lean`), equal to eval's and pdf's to float32 rounding.
+            With ``weight`` (for :meth:`sample`): (f·cosθo/pdf, pdf) from the same terms; in JIT
+            variants the weight in closed form, where D and 4 cosθi cancel: ks·F·G1(ωo) (Smith's
+            visible normals), ks·F·G/G1(ωi) (the V-cavity's), ks·F·G·(ωo·m)/(cosθi cosθm)
+            (D·cos).
             """
             if not jit:  # one call per ray: the same terms, flat, on Python floats
                 if not active:
                     return Spectrum(0.0), 0.0
                 flat = self._flat
-                alpha = flat[0] if flat is not None else self._alpha(si, True)
+                alpha = flat.alpha if flat is not None else self._alpha(si, True)
                 terms = reflection_floats(self.m_distribution, self.m_shadowing == "smith",
                                           self.m_sample_visible, alpha, wi, wo)
                 if terms is None:
@@ -362,7 +369,7 @@ def build() -> type:
                 if weight:
                     dg = dg / pdf if pdf > 0.0 else 0.0
                 if flat is not None:  # ks·F·factor per channel, one colour built
-                    ks, fresnel_floats = flat[1], flat[2]
+                    ks, fresnel_floats = flat.ks, flat.fresnel
                     if fresnel_floats is None:
                         return Spectrum(*[k * dg for k in ks]), pdf
                     return Spectrum(*[k * f * dg for k, f in
@@ -380,10 +387,10 @@ def build() -> type:
                 return Spectrum(0.0), Float(0.0)
             kind = self.m_distribution
             alpha = self._alpha(si, active)
-            D = (ndf_lean if weight else ndf)(kind, alpha, m)
+            D = ndf(kind, alpha, m)
             if self.m_shadowing == "smith":
-                g1 = smith_g1_lean if weight else smith_g1_mitsuba
-                g1_wi, g1_wo = g1(kind, alpha, wi, m), g1(kind, alpha, wo, m)
+                g1_wi = smith_g1_mitsuba(kind, alpha, wi, m)
+                g1_wo = smith_g1_mitsuba(kind, alpha, wo, m)
                 G = g1_wi * g1_wo
             else:
                 G = vcavity_g(wi, wo, m)
@@ -494,7 +501,7 @@ def build() -> type:
                 return sample_ndf(self.m_distribution, alpha, sample2)
             if self.m_shadowing == "smith":
                 if self._flat is not None:  # scalar: Mitsuba's sampler, built once
-                    return self._flat[3].sample(wi, sample2)[0]
+                    return self._flat.sampler.sample(wi, sample2)[0]
                 return sample_visible(self.m_distribution, alpha, wi, sample2)
             return sample_vcavity_visible(self.m_distribution, alpha, wi, sample2, u_facet)
 
@@ -508,7 +515,7 @@ def build() -> type:
             wi = as_vec3(w)
             if not (active and wi.z > 0):
                 return bs, Spectrum(0.0)
-            alpha = self._flat[0] if self._flat is not None else self._alpha(si, True)
+            alpha = self._flat.alpha if self._flat is not None else self._alpha(si, True)
             m = as_vec3(self._sample_normal(w, alpha, sample2, sample1))
             # the direction as bs.wo stores it (float32), so that weight = eval/pdf at bs.wo
             wo = round_f32(reflect_vec(wi, m, Vec3))
@@ -574,7 +581,7 @@ def build() -> type:
                     term = self._fresnel_term
                     fresnel_floats = lambda c: [term(c, e, k) for e, k in channels]  # noqa: E731
             distr = mi.MicrofacetDistribution(mf.mitsuba_type(self.m_distribution), alpha, True)
-            self._flat = (alpha, ks, fresnel_floats, distr)
+            self._flat = _Flat(alpha, ks, fresnel_floats, distr)
 
         def to_string(self):
             if self.m_material is not None:

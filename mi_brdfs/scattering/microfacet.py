@@ -79,42 +79,6 @@ def ndf(kind: str, alpha, m):
     return dr.select(d * m.z > D_COS_MIN, d, 0.0)
 
 
-def ndf_lean(kind: str, alpha, m):
-    """
-    :func:`ndf` with one division per lane instead of three: 1/α² is a constant where α is,
-    and 1/cos²θm serves twice. Equal to :func:`ndf` to float32 rounding, not to the bit (as
-    :func:`ndf` is to Mitsuba's D). ``cooktorrance``'s ``sample()`` uses it: the divider's
-    throughput limits that kernel.
-    """
-    cos2 = dr.square(m.z)
-    inv_a2 = 1.0 / (alpha * alpha)
-    slope2 = dr.fma(m.x, m.x, m.y * m.y) * inv_a2  # sin²θm/α², exact near the normal
-    if kind == BECKMANN:
-        inv_cos2 = 1.0 / dr.maximum(cos2, _TINY)
-        d = dr.exp(-slope2 * inv_cos2) * (dr.square(inv_cos2) * (inv_a2 * dr.inv_pi))
-    else:
-        d = (inv_a2 * dr.inv_pi) / dr.maximum(dr.square(slope2 + cos2), _TINY)
-    return dr.select(d * m.z > D_COS_MIN, d, 0.0)
-
-
-def smith_g1_lean(kind: str, alpha, v, m):
-    """
-    :func:`smith_g1_mitsuba` with one division instead of two: a = 1/(α tanθv) as
-    cosθv / √(α² sin²θv), and the GGX form as 2 cosθv / (cosθv + √(cos²θv + α² sin²θv)). Equal
-    to it to float32 rounding (see :func:`ndf_lean`).
-    """
-    xy = (alpha * alpha) * dr.fma(v.x, v.x, v.y * v.y)
-    cos_v = dr.abs(v.z)  # Λ depends on tan²θv: from below, as from above (χ⁺ decides)
-    if kind == BECKMANN:
-        a = cos_v * dr.rsqrt(xy)  # +inf at normal incidence, where G1 = 1
-        a2 = dr.square(a)
-        g1 = dr.select(a >= 1.6, 1.0,
-                       (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2))
-    else:
-        g1 = 2.0 * cos_v / dr.maximum(cos_v + dr.sqrt(dr.fma(v.z, v.z, xy)), _TINY)
-    return _facing(g1, v, m)
-
-
 def _tan2_alpha2(alpha, v):
     """(α² sin²θv, α² tan²θv) of a unit vector ``v``."""
     xy = dr.square(alpha * v.x) + dr.square(alpha * v.y)
