@@ -56,8 +56,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="override a <default> of the scene (repeatable)")
     r.add_argument("--pass-spp", type=int, metavar="N", help="samples per pixel in each pass")
     r.add_argument("--processes", type=int, metavar="N",
-                   help="worker processes for scalar scenes with Python plugins "
-                        "(default: one per core when it pays)")
+                   help="render processes for scalar scenes with Python plugins, this one "
+                        "included (default: one per core when it pays)")
     r.add_argument("--no-png", action="store_true", help="write no PNG preview")
     r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default 0)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")

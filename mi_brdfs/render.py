@@ -6,7 +6,8 @@ Passes make a render interruptible (Ctrl-C keeps what is done), bounded in time
 variants Mitsuba calls a Python BSDF once per ray from its C++ render threads, and those calls
 serialise on the GIL. Two render threads fighting for it made a Cornell box 150–200× slower than
 with the built-in ``diffuse``; one thread made it about 20×. So a scalar scene that holds a Python
-plugin renders on one thread per process, with the passes spread over one process per core.
+plugin renders on one thread per process, with the passes spread over one process per core: this
+one and helpers started for the render, which it keeps rendering beside while they start.
 JIT variants trace the plugin once into a kernel and need none of this.
 """
 
@@ -17,6 +18,7 @@ import math
 import os
 import platform
 import signal
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -32,7 +34,7 @@ JIT_LANES_PER_PASS = 1 << 22
 #: process pool to react, long enough that per-pass overhead does not matter.
 SCALAR_PASS_S = 0.5
 
-#: Seconds a worker process needs to start (import Mitsuba, load the scene); the render path
+#: Seconds a helper process needs to start (import Mitsuba, load the scene); the render path
 #: only spreads a scalar render over processes when that start is repaid.
 WORKER_START_S = 0.5  # measured: 0.37 s for two workers on 2 cores (Cornell box)
 
@@ -143,9 +145,14 @@ class _Schedule:
         self.issued = 0        # spp handed out so far
         self.index = 0         # passes handed out so far
         self.pass_times: list[float] = []
+        self._lock = threading.Lock()  # passes are handed out to this process and to helpers
 
     def next(self) -> tuple[int, int] | None:
         """(pass index, pass spp) of the next pass, or None when the render is complete."""
+        with self._lock:
+            return self._next()
+
+    def _next(self) -> tuple[int, int] | None:
         if self.spp is not None and self.issued >= self.spp:
             return None
         if self.stop is not None and self.stop.requested:
@@ -193,8 +200,9 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
     bounded by :data:`JIT_LANES_PER_PASS`), or in scalar variants a first pass of 1 spp that
     times the scene, then passes of about :data:`SCALAR_PASS_S` seconds.
 
-    Parameter ``processes`` (int | None): worker processes for scalar scenes with Python plugins;
-    default: one per core when the render is long enough to repay their start, else none.
+    Parameter ``processes`` (int | None): render processes for scalar scenes with Python plugins,
+    this one included (it renders passes beside ``processes`` − 1 helpers); default: one per
+    core when the render is long enough to repay the helpers' start, else this one alone.
 
     The first Ctrl-C stops the render after the passes under way and returns what was
     accumulated (``interrupted=True``); a second one raises KeyboardInterrupt at once.
@@ -228,14 +236,20 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
     arrangement = "jit" if jit else "threads"
     bar = Progress(spp, label=f"render {path.name}", unit=" spp") if progress else None
 
+    lock = threading.Lock()  # helpers' passes are recorded from the pool's result thread
+
+    def record(image, k: int, seconds: float) -> None:
+        with lock:
+            schedule.pass_times.append(seconds)
+            if image is not None:
+                acc.add(image, k)
+            if bar:
+                bar.update(acc.spp)
+
     def run_pass(index: int, k: int) -> None:
         t0 = time.perf_counter()
         image = _render_pass(scene, pass_seed(seed, index), k)
-        schedule.pass_times.append(time.perf_counter() - t0)
-        if image is not None:
-            acc.add(image, k)
-        if bar:
-            bar.update(acc.spp)
+        record(image, k, time.perf_counter() - t0)
 
     threads = dr.thread_count()
     try:
@@ -257,7 +271,8 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
             # worth it when starting the workers and splitting the rest beats going on alone
             if workers > 1 and WORKER_START_S + remaining_s / workers < 0.9 * remaining_s:
                 arrangement = f"{workers} processes × 1 thread"
-                _render_in_processes(workers, variant, path, defines, seed, schedule, acc, bar)
+                _render_with_helpers(workers - 1, variant, path, defines, seed, schedule,
+                                     run_pass, record)
         while (item := schedule.next()) is not None:
             run_pass(*item)
     finally:
@@ -349,40 +364,60 @@ def _worker_render(seed: int, spp: int):
     return image, time.perf_counter() - t0
 
 
-def _render_in_processes(workers, variant, path, defines, seed, schedule, acc, bar) -> None:
-    """Run the schedule's remaining passes on ``workers`` single-threaded processes."""
+def _render_with_helpers(helpers, variant, path, defines, seed, schedule, run_pass,
+                         record) -> None:
+    """
+    Run the schedule's remaining passes in this process (``run_pass``) and, as they come up, on
+    ``helpers`` single-threaded helper processes, each handed its next pass as soon as it
+    returns one (``record`` takes their images). This process renders while the helpers
+    import Mitsuba and load the scene, so no core waits for their start.
+    """
     import multiprocessing as mp
 
-    pool = mp.get_context("spawn").Pool(workers, _worker_init, (variant, str(path), defines))
-    pending = {}
-    try:
-        def submit():
-            item = schedule.next()
-            if item is None:
-                return False
-            index, k = item
-            pending[index] = (k, pool.apply_async(_worker_render, (pass_seed(seed, index), k)))
-            return True
+    state = threading.Condition()
+    pending, failures = [0], []
+    pool = mp.get_context("spawn").Pool(helpers, _worker_init, (variant, str(path), defines))
 
-        for _ in range(workers):  # one pass per worker: queued passes would overrun a budget
-            if not submit():
-                break
-        while pending and not schedule.stop.requested:
-            done = [i for i, (_, r) in pending.items() if r.ready()]
-            if not done:
-                time.sleep(0.02)
-                continue
-            for index in done:
-                k, result = pending.pop(index)
-                image, seconds = result.get()
-                schedule.pass_times.append(seconds)
-                if image is not None:
-                    acc.add(image, k)
-                if bar:
-                    bar.update(acc.spp)
-                submit()
+    def submit() -> None:
+        with state:  # not after the pool is closed (failures then holds a None)
+            if failures or (item := schedule.next()) is None:
+                return
+            index, k = item
+            pool.apply_async(_worker_render, (pass_seed(seed, index), k),
+                             callback=lambda result, k=k: done(result, k), error_callback=failed)
+            pending[0] += 1
+
+    def done(result, k: int) -> None:  # on the pool's result thread
+        try:
+            image, seconds = result
+            record(image, k, seconds)
+            submit()  # before this pass stops counting as pending: the wait below sees the next
+        except BaseException as error:  # the thread must not die: the wait below would hang
+            failed(error)
+            return
+        with state:
+            pending[0] -= 1
+            state.notify_all()
+
+    def failed(error: BaseException) -> None:
+        with state:
+            failures.append(error)
+            pending[0] -= 1
+            state.notify_all()
+
+    try:
+        for _ in range(helpers):  # one pass each: a queued pass could overrun a time budget
+            submit()
+        while not failures and (item := schedule.next()) is not None:
+            run_pass(*item)
+        with state:
+            while pending[0] and not failures and not schedule.stop.requested:
+                state.wait(0.1)
+        if failures:
+            raise failures[0]
         pool.close()
     finally:
+        with state:
+            failures.append(None)  # no more submissions from a late result
         pool.terminate()
         pool.join()
-

@@ -17,7 +17,6 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import Description, ParameterError
-from ..scattering.vector import Vec3
 
 # -------------------------------------------------------------------------------------------------
 # Variant primitives
@@ -58,10 +57,6 @@ def variant_tools() -> SimpleNamespace:
         # Mitsuba's dr::none_or<false>(mask): true only where it is known that no lane is active,
         # i.e. in scalar variants for a false mask; an early return there saves the rest.
         none=none,
-        # Directions for the terms (mi_brdfs.scattering.vector): mi.Vector3f in JIT variants,
-        # a tuple of Python floats in scalar ones, where vector operations are slow.
-        vec3=mi.Vector3f if jit else Vec3,
-        as_vec3=(lambda v: v) if jit else (lambda v: Vec3(v.x, v.y, v.z)),
         # Mueller matrices in polarized variants; the identity elsewhere.
         depolarize=mi.depolarizer if mi.is_polarized else (lambda value: value),
     )

@@ -204,3 +204,30 @@ def test11_bad_bitmap_reflectance(variant_scalar_rgb):
     with pytest.raises(RuntimeError, match=r"texture with values in \[1.7, 1.7\]"):
         mi.load_dict({"type": "lambert", "reflectance": {"type": "bitmap", "bitmap": bitmap,
                                                           "raw": True}})
+
+
+def test12_scalar_constants_follow_updates_and_textures(variant_scalar_rgb, np_rng):
+    """
+    Scalar RGB reads a constant ρ once as floats (``parameters_changed``): after an update
+    through mi.traverse the plugin still equals ``diffuse`` with the new ρ, bit for bit, and a
+    bitmap ρ (evaluated per call) equals ``diffuse`` with the same bitmap.
+    """
+    wi, wo = random_directions(np_rng, 32, lower=False), random_directions(np_rng, 32)
+    s1, s2 = np_rng.random(32), np_rng.random((32, 2))
+    rgb = {"type": "rgb", "value": [0.2, 0.5, 0.9]}
+    bitmap = {"type": "bitmap", "raw": True, "bitmap": mi.Bitmap(
+        np.array([[[0.1, 0.2, 0.3], [0.9, 0.8, 0.7]], [[0.4, 0.4, 0.4], [0.6, 0.1, 0.3]]],
+                 dtype=np.float32))}
+    for reflectance, update in ((rgb, [0.7, 0.1, 0.3]), (bitmap, None)):
+        pair = [mi.load_dict({"type": t, "reflectance": reflectance})
+                for t in ("lambert", "diffuse")]
+        if update is not None:
+            for bsdf in pair:
+                params = mi.traverse(bsdf)
+                params["reflectance.value"] = mi.Color3f(update)
+                params.update()
+        ours, ref = pair
+        for a, b in zip(eval_pdf(ours, wi, wo), eval_pdf(ref, wi, wo)):
+            np.testing.assert_array_equal(a, b)
+        a, b = sample(ours, wi, s1, s2), sample(ref, wi, s1, s2)
+        np.testing.assert_allclose(a["weight"], b["weight"], rtol=1e-6)
