@@ -28,3 +28,25 @@ def test02_quick_benchmark(tmp_path, capsys):
     for figure in re.findall(r"\]\((figures/[^)]+\.png)\)", report):
         assert (tmp_path / figure).stat().st_size > 1000, figure
     assert "measurements as expected" in capsys.readouterr().out
+
+
+def test03_time_to_target_error():
+    """
+    ``benchmark.error_time.time_to`` on renders made to its model: errors
+    σ·sqrt(1/spp + 1/spp_ref) and times a + b·spp give back a + b·σ²/target²; each render is
+    one estimate of σ², so a single noisy render moves the result by its share only.
+    """
+    import math
+
+    from mi_brdfs.benchmark.error_time import time_to
+
+    sigma2, a, b, ref = 0.64, 0.02, 0.004, 1024
+    rows = [dict(who="plugin", spp=spp, time=a + b * spp,
+                 rel_rmse=math.sqrt(sigma2 * (1 / spp + 1 / ref))) for spp in (1, 2, 4, 8, 16)]
+    rows.append(dict(who="built-in", spp=1, time=1.0, rel_rmse=1.0))  # another contender's
+    want = a + b * sigma2 / 0.01 ** 2
+    assert math.isclose(time_to(rows, "plugin", ref), want, rel_tol=1e-9)
+    assert math.isclose(time_to(rows, "plugin", ref, target=0.02), a + b * sigma2 / 4e-4,
+                        rel_tol=1e-9)
+    rows[4]["rel_rmse"] *= math.sqrt(1.5)  # the largest spp 50 % noisier in σ²
+    assert math.isclose(time_to(rows, "plugin", ref), a + b * sigma2 * 1.1 / 1e-4, rel_tol=1e-9)

@@ -114,6 +114,63 @@ def scalar_threads(ctx: Context) -> list:
     return rows
 
 
+FORWARD = "mi_brdfs_bench_forward"
+
+
+def _register_forward() -> None:
+    """
+    Register :data:`FORWARD` in the current variant: a Python BSDF that hands every call to a
+    built-in ``diffuse`` of its reflectance. It renders ``diffuse``'s image at the cost of
+    Mitsuba calling into Python and Python calling back: the least any Python plugin pays.
+    """
+    class Forward(mi.BSDF):
+        def __init__(self, props):
+            super().__init__(props)
+            self.inner = mi.load_dict({"type": "diffuse",
+                                       "reflectance": props.get_texture("reflectance", 0.5)})
+            self.m_flags = int(self.inner.flags())
+            self.m_components = [int(self.inner.flags(0))]
+
+        def eval(self, ctx, si, wo, active=True):
+            return self.inner.eval(ctx, si, wo, active)
+
+        def pdf(self, ctx, si, wo, active=True):
+            return self.inner.pdf(ctx, si, wo, active)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.inner.eval_pdf(ctx, si, wo, active)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            return self.inner.sample(ctx, si, sample1, sample2, active)
+
+    mi.register_bsdf(FORWARD, Forward)
+
+
+def scalar_floor(ctx: Context) -> list:
+    """
+    The Cornell box in-process on one render thread with ``diffuse``, :data:`FORWARD` and
+    ``lambert``, interleaved: what calling Python costs, apart from what the plugin computes.
+    """
+    res, spp = ctx.n(64, 16), ctx.n(8, 2)
+    mi_brdfs.use_variant(ctx.scalar_variant)
+    threads = dr.thread_count()
+    try:
+        dr.set_thread_count(1)
+        _register_forward()
+        labels = {"diffuse": "`diffuse` (C++)",
+                  FORWARD: "a Python BSDF forwarding each call to `diffuse`",
+                  "lambert": "`lambert`"}
+        scenes = {m: load_scene("cbox", {"res": str(res), "material": m}) for m in labels}
+        times = interleaved({m: (lambda sc=sc: mi.render(sc, spp=spp))
+                             for m, sc in scenes.items()}, repeats=ctx.n(7, 2))
+        return [(label, f"{median(times[m]):.3f} s",
+                 f"**{median_ratio(times, m, 'diffuse'):.2f}×**")
+                for m, label in labels.items()]
+    finally:
+        dr.set_thread_count(threads)
+        mi_brdfs.use_variant(ctx.variant)
+
+
 #: BSDFs whose calls the scalar per-call profile times (the metal of the metalbox pair: Au).
 CALLS = [("lambert", {"type": "lambert"}), ("diffuse", {"type": "diffuse"}),
          ("cooktorrance (Smith)", {"type": "cooktorrance", "shadowing": "smith",
@@ -131,7 +188,6 @@ def scalar_calls(ctx: Context) -> list:
     from ..plugins.cooktorrance import conductor_ior
     from ..scattering import fresnel
     from ..scattering import microfacet as mf
-    from ..scattering.vector import Vec3
     mi_brdfs.use_variant(ctx.scalar_variant)
     try:
         n = ctx.n(20_000, 1_000)
@@ -143,7 +199,7 @@ def scalar_calls(ctx: Context) -> list:
             b = load_bsdf(spec)
             calls[(label, "eval_pdf")] = lambda b=b: [b.eval_pdf(c, si, wo) for _ in range(n)]
             calls[(label, "sample")] = lambda b=b: [b.sample(c, si, 0.4, u) for _ in range(n)]
-        wi_, wo_ = Vec3(0.3, 0.2, 0.932738), Vec3(0.1, 0.4, 0.910465)
+        wi_, wo_ = (0.3, 0.2, 0.932738), (0.1, 0.4, 0.910465)
         # Python floats, as the plugin holds them (NumPy scalars would be 2× slower here)
         consts = [fresnel.channel_constants(float(e), float(k))
                   for e, k in zip(*conductor_ior("Au"))]
@@ -151,7 +207,7 @@ def scalar_calls(ctx: Context) -> list:
         def arithmetic():
             for _ in range(n):
                 mf.reflection_floats("beckmann", True, True, 0.2, wi_, wo_)
-                fresnel.exact_channels(0.9, consts)
+                fresnel.exact_channels(consts, 0.9)
         calls[("cooktorrance (Smith)", "its arithmetic alone")] = arithmetic
         times = interleaved(calls, repeats=ctx.n(5, 2))
         return [(label, call, f"{median(t) / n * 1e6:.2f} µs")
@@ -210,6 +266,7 @@ def section(ctx: Context) -> Section:
     s = Section("Backends")
     table = jit_ratios(ctx, s) + scalar_ratios(ctx, s)
     threads = scalar_threads(ctx)
+    floor = scalar_floor(ctx)
     calls = scalar_calls(ctx)
     many = many_materials(ctx, s)
     s.markdown = "\n".join([
@@ -227,12 +284,17 @@ def section(ctx: Context) -> Section:
         "ray from its render threads, and those calls serialise on the GIL "
         f"(Cornell box, in-process `mi.render`, {ctx.scalar_variant}):", "",
         md_table(["material", "render threads", "time"], threads), "",
+        "The least a Python plugin costs in a scalar variant: the same Cornell box, in-process "
+        "on one render thread, with a Python BSDF that computes nothing and hands every call "
+        "to a built-in `diffuse` (the same image as `diffuse`), medians of interleaved repeats. "
+        "The package's render path adds the start of its helper processes to this:", "",
+        md_table(["BSDF", "time", "ratio to `diffuse`"], floor), "",
         "What the scalar ratios are made of: Mitsuba calls `eval_pdf` (towards the sampled "
-        "light) and `sample` once each per path vertex. Time per call from Python (one call "
-        f"from C++ costs about the same), {ctx.scalar_variant}, medians of interleaved repeats; "
-        "the last row is the least cooktorrance has to compute per call: D, the two G1, the pdf "
-        "and the exact Fresnel of three channels on Python floats, nothing read from or written "
-        "to Mitsuba objects:", "",
+        "light) and `sample` once each per path vertex. Time per call from Python (the table "
+        f"above prices the call from C++), {ctx.scalar_variant}, medians of interleaved "
+        "repeats; the last row is the least cooktorrance has to compute per call: D, the two "
+        "G1, the pdf and the exact Fresnel of three channels on Python floats, nothing read "
+        "from or written to Mitsuba objects:", "",
         md_table(["BSDF", "call", "time per call"], calls), "",
         "Trace overhead per BSDF instance (JIT): K spheres, each with its own material "
         "instance (a different parameter value). Every Python instance is traced into the "

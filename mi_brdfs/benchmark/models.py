@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 
@@ -17,7 +16,7 @@ from ..campaign.core import Context, Row, Section, md_table
 from ..checks import _batch
 from ..plugins.cooktorrance import conductor_ior
 from ..reference import cooktorrance as ref
-from .timing import interleaved, median, median_ratio
+from .timing import interleaved, kernel_timed, median, median_ratio
 
 #: (choice, A, B): eval cost of A relative to B.
 CHOICES = [
@@ -57,6 +56,7 @@ NO_MORE = 1.02
 
 
 def _eval_call(bsdf, n: int, seed: int = 0, sample: bool = False):
+    """A function tracing ``eval_pdf`` (or ``sample``) at n random lanes, unevaluated."""
     rng = np.random.default_rng(seed)
     wi = _batch.random_directions(rng, n, sphere=False)
     si = _batch.interaction(wi, n)
@@ -65,26 +65,33 @@ def _eval_call(bsdf, n: int, seed: int = 0, sample: bool = False):
         s1 = mi.Float(rng.random(n, dtype=np.float32))
         s2 = mi.Point2f(mi.Float(rng.random(n, dtype=np.float32)),
                         mi.Float(rng.random(n, dtype=np.float32)))
-        return lambda: dr.eval(bsdf.sample(ctx, si, s1, s2))
+        return lambda: bsdf.sample(ctx, si, s1, s2)
     wo = _batch.random_directions(rng, n, sphere=False).astype(np.float32)
     w = mi.Vector3f(mi.Float(wo[:, 0]), mi.Float(wo[:, 1]), mi.Float(wo[:, 2]))
-    return lambda: dr.eval(bsdf.eval_pdf(ctx, si, w))
+    return lambda: bsdf.eval_pdf(ctx, si, w)
+
+
+def _kernel_seconds(fn) -> float:
+    """The kernels' execution time of one call of ``fn`` (DrJit's kernel history): the cost
+    per evaluation, without the tracing of the Python code, a fixed cost per launch (0.2–0.8 ms
+    in Sampling strategies, different for every plugin; a render traces once)."""
+    return kernel_timed(fn)[1]
 
 
 def jit_seconds(spec, ctx: Context, sample: bool = False) -> float:
-    """Seconds per 1e7 evaluations of ``spec`` in the JIT variant (median of repeats)."""
+    """Kernel seconds per 1e7 evaluations of ``spec`` in the JIT variant (median of repeats)."""
     n = ctx.n(10_000_000, 1_000_000)
     times = interleaved({"a": _eval_call(load_bsdf(spec), n, sample=sample)},
-                        repeats=ctx.n(5, 2))
+                        repeats=ctx.n(5, 2), timer=_kernel_seconds)
     return median(times["a"]) * 1e7 / n
 
 
 def jit_cost(a, b, ctx: Context, sample: bool = False):
-    """(seconds per 1e7 evaluations of A, of B, median ratio) in the JIT variant."""
+    """(kernel seconds per 1e7 evaluations of A, of B, median ratio) in the JIT variant."""
     n = ctx.n(10_000_000, 1_000_000)
     funcs = {"a": _eval_call(load_bsdf(a), n, sample=sample),
              "b": _eval_call(load_bsdf(b), n, sample=sample)}
-    times = interleaved(funcs, repeats=ctx.n(9, 3))
+    times = interleaved(funcs, repeats=ctx.n(9, 3), timer=_kernel_seconds)
     scale = 1e7 / n
     return median(times["a"]) * scale, median(times["b"]) * scale, median_ratio(times, "a", "b")
 
@@ -152,7 +159,9 @@ def section(ctx: Context) -> Section:
                               f"{ratio:.2f}×", f"≤ {NO_MORE}×", ratio <= NO_MORE))
     s.markdown = "\n".join([
         "Cost per 1e7 evaluations (`eval_pdf`, or `sample` where the choice is the sampler) in "
-        f"`{ctx.variant}` on random direction pairs, medians of interleaved repeats, and per "
+        f"`{ctx.variant}` on random direction pairs: the kernels' execution time (DrJit's kernel "
+        "history; tracing the Python code is a fixed cost per launch, left out as in Sampling "
+        "strategies), medians of interleaved repeats, and per "
         f"call in `{ctx.scalar_variant}` (where Mitsuba calls the plugin once per ray):", "",
         md_table(["choice", "call", "A per 1e7", "B per 1e7", "A / B (JIT)",
                   "A / B per call (scalar)"], rows), "",

@@ -45,7 +45,8 @@ def section(ctx: Context) -> Section:
     s.markdown = "\n".join([
         "The float32 error of `eval` (99th percentile at the directions the plugin samples, "
         "against the float64 reference; `checks.eval_precision`) next to the cost of an "
-        f"evaluation (`eval_pdf`, {ctx.variant}, median of interleaved repeats), across each "
+        f"evaluation (`eval_pdf`, {ctx.variant}, the kernels' execution time, median of "
+        "interleaved repeats), across each "
         "parameter's range. The largest spread of the cost over one range in this run is "
         f"{worst[2]:.2f}× ({worst[0]}, {worst[1]})" + (
             ": the extreme values, where float32 error grows, cost no more to evaluate than the "
