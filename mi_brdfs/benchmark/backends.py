@@ -12,7 +12,6 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-import mi_brdfs
 from ..campaign.core import Context, Row, Section, md_table
 from ..render import render
 from ..scenes import load_scene
@@ -72,25 +71,25 @@ def scalar_ratios(ctx: Context, s: Section, pairs=PAIRS) -> list:
     """Scalar: both through the package's render path (which picks the arrangement)."""
     res, spp, repeats = ctx.n(128, 16), ctx.n(16, 2), ctx.n(5, 2)
     table = []
-    mi_brdfs.use_variant(ctx.scalar_variant)
-    for pair in pairs:
-        results = {}
+    with ctx.scalar():
+        for pair in pairs:
+            results = {}
 
-        def run(key, defines, pair=pair):
-            results[key] = render(pair.scene, spp=spp, defines=dict(defines, res=str(res)),
-                                  progress=False)
-        times = interleaved({"plugin": lambda: run("plugin", pair.ours),
-                             "built-in": lambda: run("built-in", pair.ref)}, repeats=repeats)
-        ratio = median_ratio(times, "plugin", "built-in")
-        per = {k: median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
-        goal = f"≤ {TARGET_SCALAR:g}" if pair.target else "—"
-        table.append((pair.label, f"{ctx.scalar_variant} ({results['plugin'].arrangement})",
-                      f"{per['plugin']:.0f} ns", f"{per['built-in']:.0f} ns", f"**{ratio:.2f}×**",
-                      goal, "—"))
-        if pair.target:
-            s.rows.append(Row(pair.label, f"{ctx.scalar_variant} render-path time ratio",
-                              f"{ratio:.2f}×", f"≤ {TARGET_SCALAR:g}×", ratio <= TARGET_SCALAR))
-    mi_brdfs.use_variant(ctx.variant)
+            def run(key, defines, pair=pair):
+                results[key] = render(pair.scene, spp=spp, defines=dict(defines, res=str(res)),
+                                      progress=False)
+            times = interleaved({"plugin": lambda: run("plugin", pair.ours),
+                                 "built-in": lambda: run("built-in", pair.ref)}, repeats=repeats)
+            ratio = median_ratio(times, "plugin", "built-in")
+            per = {k: median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
+            goal = f"≤ {TARGET_SCALAR:g}" if pair.target else "—"
+            table.append((pair.label, f"{ctx.scalar_variant} ({results['plugin'].arrangement})",
+                          f"{per['plugin']:.0f} ns", f"{per['built-in']:.0f} ns",
+                          f"**{ratio:.2f}×**", goal, "—"))
+            if pair.target:
+                s.rows.append(Row(pair.label, f"{ctx.scalar_variant} render-path time ratio",
+                                  f"{ratio:.2f}×", f"≤ {TARGET_SCALAR:g}×",
+                                  ratio <= TARGET_SCALAR))
     return table
 
 
@@ -98,9 +97,7 @@ def scalar_threads(ctx: Context) -> list:
     """Why the arrangement: a plugin in scalar on 1 and 2 render threads, in-process."""
     res, spp = ctx.n(64, 16), ctx.n(8, 2)
     rows = []
-    mi_brdfs.use_variant(ctx.scalar_variant)
-    threads = dr.thread_count()
-    try:
+    with ctx.scalar():
         for material in ("lambert", "diffuse"):
             scene = load_scene("cbox", {"res": str(res), "material": material})
             for n in (1, 2):
@@ -108,9 +105,6 @@ def scalar_threads(ctx: Context) -> list:
                 seconds = median([timed(lambda: mi.render(scene, spp=spp))[0]
                                   for _ in range(ctx.n(3, 1))])
                 rows.append((material, n, f"{seconds:.3f} s"))
-    finally:
-        dr.set_thread_count(threads)
-        mi_brdfs.use_variant(ctx.variant)
     return rows
 
 
@@ -152,10 +146,7 @@ def scalar_floor(ctx: Context) -> list:
     ``lambert``, interleaved: what calling Python costs, apart from what the plugin computes.
     """
     res, spp = ctx.n(64, 16), ctx.n(8, 2)
-    mi_brdfs.use_variant(ctx.scalar_variant)
-    threads = dr.thread_count()
-    try:
-        dr.set_thread_count(1)
+    with ctx.scalar(threads=1):
         _register_forward()
         labels = {"diffuse": "`diffuse` (C++)",
                   FORWARD: "a Python BSDF forwarding each call to `diffuse`",
@@ -166,9 +157,6 @@ def scalar_floor(ctx: Context) -> list:
         return [(label, f"{median(times[m]):.3f} s",
                  f"**{median_ratio(times, m, 'diffuse'):.2f}×**")
                 for m, label in labels.items()]
-    finally:
-        dr.set_thread_count(threads)
-        mi_brdfs.use_variant(ctx.variant)
 
 
 #: BSDFs whose calls the scalar per-call profile times (the metal of the metalbox pair: Au).
@@ -188,8 +176,7 @@ def scalar_calls(ctx: Context) -> list:
     from ..plugins.cooktorrance import conductor_ior
     from ..scattering import fresnel
     from ..scattering import microfacet as mf
-    mi_brdfs.use_variant(ctx.scalar_variant)
-    try:
+    with ctx.scalar():
         n = ctx.n(20_000, 1_000)
         si = mi.SurfaceInteraction3f()
         si.wi = mi.Vector3f(0.3, 0.2, 0.932738)
@@ -207,13 +194,11 @@ def scalar_calls(ctx: Context) -> list:
         def arithmetic():
             for _ in range(n):
                 mf.reflection_floats("beckmann", True, True, 0.2, wi_, wo_)
-                fresnel.exact_channels(consts, 0.9)
+                fresnel.exact_channels(0.9, consts)
         calls[("cooktorrance (Smith)", "its arithmetic alone")] = arithmetic
         times = interleaved(calls, repeats=ctx.n(5, 2))
         return [(label, call, f"{median(t) / n * 1e6:.2f} µs")
                 for (label, call), t in times.items()]
-    finally:
-        mi_brdfs.use_variant(ctx.variant)
 
 
 #: (label, the plugin's material dict given index i of K, the built-in's)

@@ -10,7 +10,6 @@ import math
 import mitsuba as mi
 import numpy as np
 
-import mi_brdfs
 from ..bsdfspec import load_bsdf
 from ..campaign.core import Context, Row, Section, md_table
 from ..checks import _batch
@@ -98,8 +97,7 @@ def jit_cost(a, b, ctx: Context, sample: bool = False):
 
 def scalar_cost(a, b, ctx: Context):
     """(µs per eval_pdf call of A, of B, ratio) in the scalar variant (per ray in a render)."""
-    mi_brdfs.use_variant(ctx.scalar_variant)
-    try:
+    with ctx.scalar():
         n = ctx.n(20_000, 2_000)
         calls = {}
         for key, spec in (("a", a), ("b", b)):
@@ -115,8 +113,6 @@ def scalar_cost(a, b, ctx: Context):
         times = interleaved(calls, repeats=ctx.n(5, 2))
         return (median(times["a"]) / n * 1e6, median(times["b"]) / n * 1e6,
                 median_ratio(times, "a", "b"))
-    finally:
-        mi_brdfs.use_variant(ctx.variant)
 
 
 def fresnel_error() -> list:

@@ -8,7 +8,6 @@ import math
 import mitsuba as mi
 import numpy as np
 
-import mi_brdfs
 from .. import checks
 from ..checks import _batch
 from ..compare import compare, figure
@@ -254,17 +253,16 @@ def stability(ctx: Context, s: Section) -> None:
 
 
 def scalar_pass(ctx: Context, s: Section) -> None:
-    mi_brdfs.use_variant(ctx.scalar_variant)
-    for shadowing in ("vcavity", "smith"):
-        sp = ct(shadowing=shadowing, alpha=0.3, material="Au")
-        s.rows.append(Row.of(f"cooktorrance {shadowing} ({ctx.scalar_variant})",
-                             checks.check_consistency(sp, n=ctx.n(800, 200))))
-    r = checks.check_equal(ct(shadowing="smith", alpha=0.3, material="Au"),
-                           {"type": "roughconductor", "alpha": 0.3, "material": "Au"},
-                           n=ctx.n(800, 200), rtol=1e-5, upper=True, sample=False)
-    s.rows.append(Row.of(f"cooktorrance smith ({ctx.scalar_variant})", r,
-                         "= roughconductor (eval, pdf)"))
-    mi_brdfs.use_variant(ctx.variant)
+    with ctx.scalar():
+        for shadowing in ("vcavity", "smith"):
+            sp = ct(shadowing=shadowing, alpha=0.3, material="Au")
+            s.rows.append(Row.of(f"cooktorrance {shadowing} ({ctx.scalar_variant})",
+                                 checks.check_consistency(sp, n=ctx.n(800, 200))))
+        r = checks.check_equal(ct(shadowing="smith", alpha=0.3, material="Au"),
+                               {"type": "roughconductor", "alpha": 0.3, "material": "Au"},
+                               n=ctx.n(800, 200), rtol=1e-5, upper=True, sample=False)
+        s.rows.append(Row.of(f"cooktorrance smith ({ctx.scalar_variant})", r,
+                             "= roughconductor (eval, pdf)"))
 
 
 def section(ctx: Context) -> Section:

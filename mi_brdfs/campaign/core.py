@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import os
 import platform
@@ -36,6 +37,25 @@ class Context:
 
     def n(self, full: int, quick: int) -> int:
         return quick if self.quick else full
+
+    @contextlib.contextmanager
+    def scalar(self, threads: int | None = None):
+        """
+        Within: the scalar variant, on ``threads`` render threads where given (a section
+        may set others); after: :attr:`variant` and the thread count there was before.
+        """
+        import drjit as dr
+
+        import mi_brdfs
+        mi_brdfs.use_variant(self.scalar_variant)
+        before = dr.thread_count()
+        try:
+            if threads is not None:
+                dr.set_thread_count(threads)
+            yield
+        finally:
+            dr.set_thread_count(before)
+            mi_brdfs.use_variant(self.variant)
 
 
 @dataclass

@@ -72,9 +72,9 @@ def build() -> type:
             self.m_reflectance = _common.reflectance(props, "lambert", "reflectance", 0.5)
             self.m_flags = FLAGS
             self.m_components = [FLAGS]
-            #: Scalar variants, constant ρ: (ρ, ρ/π rounded to float32) per channel as Python
+            #: Scalar variants, constant ρ: ρ/π per channel rounded to float32, as Python
             #: floats, else None (see flat_ok).
-            self._flat = None
+            self._rho_pi = None
             self.parameters_changed()
 
         def _eval_pdf(self, si, wo, active):
@@ -84,10 +84,10 @@ def build() -> type:
             active = active & (cos_theta_i > 0) & (cos_theta_o > 0)  # one-sided, like `diffuse`
             if none(active):
                 return Spectrum(0.0), Float(0.0)
-            if self._flat is not None:
+            if self._rho_pi is not None:
                 # float32 products: a product of two float32 values is exact in a Python float,
                 # and Mitsuba rounds it to float32 once, as float32 arithmetic would
-                return (Spectrum(*[c * cos_theta_o for c in self._flat[1]]),
+                return (Spectrum(*[c * cos_theta_o for c in self._rho_pi]),
                         cosine_hemisphere_pdf(wo))
             value = self.m_reflectance.eval(si, active) * INV_PI * cos_theta_o
             pdf = cosine_hemisphere_pdf(wo)
@@ -104,8 +104,6 @@ def build() -> type:
             bs.sampled_type = UInt32(DIFFUSE)
             bs.sampled_component = UInt32(0)
             # f·cosθo / pdf = (ρ/π·cosθo) / (cosθo/π) = ρ
-            if self._flat is not None:
-                return bs, Spectrum(*self._flat[0]) if pdf > 0 else Spectrum(0.0)
             weight = self.m_reflectance.eval(si, active)
             return bs, select(active & (pdf > 0), depolarize(weight), 0.0)
 
@@ -132,12 +130,11 @@ def build() -> type:
 
         def parameters_changed(self, keys=()):
             """Read a constant ρ once as per-channel floats where that is valid (flat_ok)."""
-            self._flat = None
+            self._rho_pi = None
             if not flat_ok or self.m_reflectance.is_spatially_varying():
                 return
-            rho = [float(c) for c in self.m_reflectance.eval(mi.SurfaceInteraction3f())]
-            rho_pi = [float(np.float32(c) * np.float32(INV_PI)) for c in rho]
-            self._flat = (rho, rho_pi)
+            rho = self.m_reflectance.eval(mi.SurfaceInteraction3f())
+            self._rho_pi = [float(np.float32(c) * np.float32(INV_PI)) for c in rho]
 
         def to_string(self):
             return f"Lambert[\n  reflectance = {_common.indent(self.m_reflectance)}\n]"

@@ -63,11 +63,10 @@ def channel_constants(eta: float, k: float) -> tuple[float, float]:
     return eta * eta - k * k, 4.0 * (eta * k) * (eta * k)
 
 
-def exact_channels(channels, cos_theta_i: float) -> list[float]:
+def exact_channels(cos_theta_i: float, channels) -> list[float]:
     """
     :func:`exact` on Python floats for several channels at once, from their
-    :func:`channel_constants` (first, so that ``functools.partial`` can bind them): the same
-    operations in the same order (equal to the last bit,
+    :func:`channel_constants`: the same operations in the same order (equal to the last bit,
     ``tests/test_microfacet_terms.py``), written for scalar variants, where Mitsuba calls a
     plugin once per ray and each ``dr.`` function on a float costs ~0.06 µs: the angle terms
     are computed once, and clamps are conditional expressions (1.2 µs a channel → 0.5 µs).

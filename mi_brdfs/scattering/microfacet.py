@@ -252,10 +252,9 @@ def reflection_floats(kind: str, smith: bool, visible: bool, alpha: float, wi, w
     r"""
     The microfacet reflection lobe for one pair of directions on Python floats, for scalar
     variants: ``(D·G/(4 cosθi), pdf, ωi·m)`` with m the half vector, or None where the pair
-    sees the back of m. ``wi`` and ``wo`` are (x, y, z) sequences of floats (tuples, or
-    :class:`~mi_brdfs.scattering.vector.Vec3`). ``smith`` picks Mitsuba's separable G1·G1
-    (else the V-cavity G), ``visible`` the visible-normal pdf (with the G1 of the same masking)
-    over D·cosθm.
+    sees the back of m. ``wi`` and ``wo`` are (x, y, z) sequences of floats. ``smith`` picks
+    Mitsuba's separable G1·G1 (else the V-cavity G), ``visible`` the visible-normal pdf (with the
+    G1 of the same masking) over D·cosθm.
 
     The same operations as :func:`ndf`, :func:`smith_g1_mitsuba`, :func:`vcavity_g`,
     :func:`vcavity_g1` and the pdfs above (equal to them to float64 rounding,

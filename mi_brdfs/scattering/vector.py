@@ -3,25 +3,17 @@ Three-vectors for the terms, cheap in every variant.
 
 The terms take anything with ``.x``, ``.y``, ``.z``: ``mi.Vector3f`` (JIT variants: the
 components are arrays, and these helpers trace the same operations as ``dr.dot`` and
-``dr.normalize``) or :class:`Vec3` of Python floats (scalar variants, where Mitsuba calls a
-plugin once per ray and an operation on a ``mi.Vector3f`` costs 0.2–3 µs: ``dr.normalize``
-2.8 µs, ``dr.dot`` 0.7 µs, against 0.01 µs for a float product).
+``dr.normalize``) or a named tuple of Python floats. Scalar variants, where Mitsuba calls a
+plugin once per ray and an operation on a ``mi.Vector3f`` costs 0.2–3 µs (``dr.normalize``
+2.8 µs, ``dr.dot`` 0.7 µs, against 0.01 µs for a float product), use the flat float versions
+of the terms (``microfacet.reflection_floats``) on (x, y, z) tuples, and :func:`reflect_f32`.
 """
 
 from __future__ import annotations
 
 import struct
-from typing import NamedTuple
 
 import drjit as dr
-
-
-class Vec3(NamedTuple):
-    """A direction of Python floats, for scalar variants."""
-
-    x: float
-    y: float
-    z: float
 
 
 def dot(a, b):
