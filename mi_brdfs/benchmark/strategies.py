@@ -56,9 +56,14 @@ def _draws(theta: float, n: int, seed: int):
 
 
 def own(bsdf, si, s1, s2):
-    """The BSDF's importance sampling: the sample weight f·cos/pdf."""
-    _, w = bsdf.sample(mi.BSDFContext(), si, s1, s2)
-    return dr.mean(mi.unpolarized_spectrum(w))
+    """
+    The BSDF's importance sampling: the sample weight f·cos/pdf, taken where bs.pdf ≥ 0 (so
+    everywhere), so that the kernel computes the pdf, which a path tracer uses for MIS: DrJit
+    leaves out what an estimate does not use, and a sampler whose weight does not need its pdf
+    would look cheaper than it renders.
+    """
+    bs, w = bsdf.sample(mi.BSDFContext(), si, s1, s2)
+    return dr.select(bs.pdf >= 0, dr.mean(mi.unpolarized_spectrum(w)), 0.0)
 
 
 def cosine(bsdf, si, s1, s2):
@@ -129,7 +134,9 @@ def section(ctx: Context) -> Section:
         "(both evaluating `eval()`), and the built-in's `sample()` for the same lobe where "
         "Mitsuba has one (F ≡ 1, so the models are comparable). The time per sample is the "
         f"execution time of the kernels (DrJit's kernel history, {ctx.variant}) per 1e6 "
-        "samples, drawing the direction included; tracing the Python code before them is a "
+        "samples, drawing the direction included, and for `sample()` its `bs.pdf`, which a "
+        "path tracer uses for MIS (DrJit leaves out of a kernel what its result does not "
+        "use); tracing the Python code before them is a "
         "fixed cost per launch, whatever the number of samples, and shown apart (a render "
         "traces once for all its samples; Backends has the first-render cost). Medians of "
         "interleaved repeats; efficiency ratios are to the best of the plugin's strategies "

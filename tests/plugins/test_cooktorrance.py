@@ -396,7 +396,7 @@ def test17_stability(variants_rgb):
     """
     No NaN/Inf/negative from eval, pdf, eval_pdf, sample() at the stress directions (grazing
     down to cosθ = 6e-17, V = −L, mirror, back side) over α ∈ {0, 1e-4, 10}, η → 1, η, k up to
-    1e3; validation/cooktorrance_report.py sweeps 720 parameter sets.
+    1e3; the validation campaign (``make validate``) sweeps 720 parameter sets.
     """
     grid = []
     for eta, k in ((1.0 + 1e-6, 0.0), (1e3, 0.0), (1e3, 1e3), (0.0, 1.0)):
