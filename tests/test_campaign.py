@@ -50,3 +50,36 @@ def test03_time_to_target_error():
                         rel_tol=1e-9)
     rows[4]["rel_rmse"] *= math.sqrt(1.5)  # the largest spp 50 % noisier in σ²
     assert math.isclose(time_to(rows, "plugin", ref), a + b * sigma2 * 1.1 / 1e-4, rel_tol=1e-9)
+
+
+def test04_sampling_strategies_time_the_pdf(variant_llvm_ad_rgb):
+    """
+    ``benchmark.strategies.own`` (the ``sample()`` strategy) makes its kernel compute bs.pdf,
+    which a path tracer uses: roughconductor's D·cos sampler divides by its Jacobian for the
+    pdf alone, so that division is in own()'s kernel and not in that of the weight alone; the
+    estimates are the same.
+    """
+    import math
+
+    import drjit as dr
+    import mitsuba as mi
+    import numpy as np
+
+    from mi_brdfs.benchmark.strategies import _draws, own
+    from mi_brdfs.benchmark.timing import traced_kernels
+    from mi_brdfs.bsdfspec import load_bsdf
+
+    bsdf = load_bsdf({"type": "roughconductor", "alpha": 0.2, "sample_visible": False})
+    draws = _draws(math.radians(45.0), 1000, seed=0)
+
+    def weight_only():
+        _, w = bsdf.sample(mi.BSDFContext(), *draws)
+        return dr.mean(mi.unpolarized_spectrum(w))
+
+    def divisions(fn):
+        _, kernels = traced_kernels(fn)
+        return sum((k["ir"].getvalue() if hasattr(k["ir"], "getvalue") else str(k["ir"]))
+                   .count("fdiv") for k in kernels)
+
+    assert divisions(lambda: own(bsdf, *draws)) > divisions(weight_only)
+    np.testing.assert_array_equal(np.array(own(bsdf, *draws)), np.array(weight_only()))
