@@ -288,7 +288,7 @@ def stability(ctx: Context, s: Section) -> str:
 ENERGY_THETAS = (0.0, 45.0, 70.0, 84.26, 89.0)
 
 
-def energy_table(ctx: Context) -> str:
+def energy_table() -> str:
     """E(θ) for F ≡ 1 from the float64 reference: what single scattering loses."""
     rows = []
     for kind in KINDS:
@@ -325,7 +325,7 @@ def section(ctx: Context) -> Section:
     t_furnace, f_fig = furnace_grid(ctx, s)
     t_limit = smooth_limit(ctx, s)
     t_sampling = sampling_grid(ctx, s)
-    t_energy = energy_table(ctx)
+    t_energy = energy_table()
     grid = stability(ctx, s)
     scalar_pass(ctx, s)
     s.markdown = "\n".join([
@@ -359,7 +359,7 @@ def section(ctx: Context) -> Section:
         t_limit, "",
         "**Sampling and consistency** (χ² with the resolution chosen from the lobe; η = 1.5):",
         "", t_sampling, "",
-        f"**Stability**: no NaN, Inf or negative value from eval, pdf, eval_pdf, sample "
+        "**Stability**: no NaN, Inf or negative value from eval, pdf, eval_pdf, sample "
         f"weights or `bs.pdf` over {grid}, at the stress directions of `check_stability` "
         "(normal; grazing at cosθ = 1e-4, 1e-7, 6e-17 and 0; ωo = −ωi; the mirror direction; "
         "the back side; extreme random numbers) and random ones. The pass in "
