@@ -42,7 +42,7 @@ test: $(STAMP)
 	exit $$rc
 
 bench: $(STAMP)
-	$(VENV)/bin/mi-brdfs bench --out validation
+	$(VENV)/bin/mi-brdfs bench --out validation --readme README.md
 
 # The validation campaign: validation/REPORT.md and validation/figures/ (about 3 min)
 validate: $(STAMP)

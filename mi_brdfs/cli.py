@@ -149,6 +149,9 @@ def _parser() -> argparse.ArgumentParser:
                                    "Run it on a quiet machine; it asserts nothing.")
     b.add_argument("--quick", action="store_true", help="tiny sizes (a smoke run)")
     b.add_argument("--out", metavar="DIR", help="report folder (default: as for validate)")
+    b.add_argument("--readme", metavar="FILE",
+                   help="also fill in the figures FILE quotes from the run, each marked "
+                        "<!-- bench: KEY -->VALUE<!-- /bench --> (make bench: README.md)")
     b.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=cmd_bench)
 
@@ -343,19 +346,31 @@ def _jit_variant(what: str) -> str:
     return variant
 
 
-def _run_report(args, sections, what: str, **kwargs) -> list:
-    """Run a report's sections and print its verdict; the rows that are not as expected."""
+def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) -> list:
+    """
+    Run a report's sections and print its verdict; the rows that are not as expected. With
+    ``quotes`` (a tag) and ``args.readme``, the figures the document quotes under that tag are
+    filled in from the run.
+    """
     from .campaign import Context, run
+    from .campaign.core import fill_quotes
+    from .errors import MiBrdfsError
 
+    readme = getattr(args, "readme", None)
+    if readme and not Path(readme).is_file():
+        raise MiBrdfsError(f"--readme {readme}: no such file")
     out = _report_folder(args, kwargs.get("filename", "REPORT.md"))
     variant = _jit_variant(f"the {kwargs.get('title', 'report')}")
-    report, done = run(sections, Context(out=out, quick=args.quick, variant=variant),
-                       progress=not args.quiet, what=what, **kwargs)
+    report, done, values = run(sections, Context(out=out, quick=args.quick, variant=variant),
+                               progress=not args.quiet, what=what, **kwargs)
     rows = [r for s in done for r in s.rows]
     failed = [r for r in rows if not r.ok]
     print(f"wrote {report}: {len(rows) - len(failed)} of {len(rows)} {what} as expected")
     for r in failed:
         print(f"  unexpected: {r.plugin}: {r.check}: {r.result} ({r.verdict})")
+    if readme and quotes:
+        count = fill_quotes(readme, values, quotes)
+        print(f"updated {readme}: {count} figures quoted from {report.name}")
     return failed
 
 
@@ -368,7 +383,8 @@ def cmd_validate(args) -> int:
 def cmd_bench(args) -> int:
     from .benchmark import sections
 
-    _run_report(args, sections(), "measurements", title="mi_brdfs speed vs accuracy",
+    _run_report(args, sections(), "measurements", quotes="bench",
+                title="mi_brdfs speed vs accuracy",
                 filename="SPEED_ACCURACY.md", command="mi-brdfs bench", make_target="make bench",
                 quick_note="tiny renders whose timings are too short to judge the targets")
     return 0  # a benchmark reports targets met or missed; it does not fail

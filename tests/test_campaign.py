@@ -18,8 +18,20 @@ def test01_quick_campaign(tmp_path, capsys):
 
 
 def test02_quick_benchmark(tmp_path, capsys):
-    """mi-brdfs bench --quick: the report and its plots exist (the quick timings mean nothing)."""
-    assert main(["bench", "--quick", "--out", str(tmp_path), "-q"]) == 0
+    """
+    mi-brdfs bench --quick: the report and its plots exist (the quick timings mean nothing), and
+    --readme fills in every figure a copy of the README quotes from it: the run measures them all.
+    """
+    import shutil
+    from pathlib import Path
+
+    readme = tmp_path / "README.md"
+    shutil.copy(Path(__file__).resolve().parents[1] / "README.md", readme)
+    quoted = readme.read_text().count("<!-- bench: ")
+    assert quoted >= 40
+    assert main(["bench", "--quick", "--out", str(tmp_path), "-q", "--readme", str(readme)]) == 0
+    minutes = re.search(r"<!-- bench: run: minutes -->([\d.]+)<!-- /bench -->", readme.read_text())
+    assert readme.read_text().count("<!-- bench: ") == quoted and float(minutes.group(1)) < 5
     report = (tmp_path / "SPEED_ACCURACY.md").read_text()
     assert report.startswith("# mi_brdfs speed vs accuracy")
     for title in ("## Backends", "## Error against time"):
@@ -27,7 +39,8 @@ def test02_quick_benchmark(tmp_path, capsys):
     assert "| lambert vs diffuse | llvm_ad_rgb render time ratio |" in report
     for figure in re.findall(r"\]\((figures/[^)]+\.png)\)", report):
         assert (tmp_path / figure).stat().st_size > 1000, figure
-    assert "measurements as expected" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "measurements as expected" in out and f"{quoted} figures quoted" in out
 
 
 def test03_time_to_target_error():
@@ -83,3 +96,36 @@ def test04_sampling_strategies_time_the_pdf(variant_llvm_ad_rgb):
 
     assert divisions(lambda: own(bsdf, *draws)) > divisions(weight_only)
     np.testing.assert_array_equal(np.array(own(bsdf, *draws)), np.array(weight_only()))
+
+
+def test05_fill_quotes(tmp_path):
+    """
+    ``fill_quotes`` replaces each quoted figure by the run's value of its key, in tables too,
+    and leaves the rest; a key the run lacks is one error naming it, with the file untouched.
+    """
+    import pytest
+
+    from mi_brdfs.campaign.core import fill_quotes
+    from mi_brdfs.errors import MiBrdfsError
+
+    doc = tmp_path / "README.md"
+    text = ("took <!-- bench: run: minutes -->13.9<!-- /bench --> min\n"
+            "| a | **<!-- bench: llvm_ad_rgb: a vs b -->0.979×<!-- /bench -->** |\n"
+            "<!-- other: run: minutes -->7<!-- /other --> stays\n")
+    doc.write_text(text)
+    values = {"run: minutes": "14.2", "llvm_ad_rgb: a vs b": "1.004×", "unused": "x"}
+    assert fill_quotes(doc, values, "bench") == 2
+    assert doc.read_text() == text.replace("13.9", "14.2").replace("0.979×", "1.004×")
+    filled = doc.read_text()
+    with pytest.raises(MiBrdfsError, match="'run: minutes'"):
+        fill_quotes(doc, {"llvm_ad_rgb: a vs b": "1.0×"}, "bench")
+    assert doc.read_text() == filled
+
+
+def test06_bench_readme_must_exist(tmp_path, capsys):
+    """A --readme that does not exist: one line naming it, before anything is measured."""
+    missing = tmp_path / "nope.md"
+    assert main(["bench", "--quick", "--out", str(tmp_path), "-q", "--readme", str(missing)]) != 0
+    err = capsys.readouterr().err.strip()
+    assert err == f"mi-brdfs: error: --readme {missing}: no such file"
+    assert not (tmp_path / "SPEED_ACCURACY.md").exists()

@@ -57,6 +57,7 @@ def jit_ratios(ctx: Context, s: Section, pairs=PAIRS) -> list:
                              scenes.items()}, repeats=repeats, warmup=0)
         ratio = median_ratio(times, "plugin", "built-in")
         per = {k: median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
+        s.values[f"{ctx.variant}: {pair.label}"] = f"{ratio:.3f}×"
         goal = f"≤ {TARGET_LLVM}" if pair.target else "—"
         table.append((pair.label, ctx.variant, f"{per['plugin']:.1f} ns",
                       f"{per['built-in']:.1f} ns", f"**{ratio:.3f}×**", goal,
@@ -82,6 +83,7 @@ def scalar_ratios(ctx: Context, s: Section, pairs=PAIRS) -> list:
                                  "built-in": lambda: run("built-in", pair.ref)}, repeats=repeats)
             ratio = median_ratio(times, "plugin", "built-in")
             per = {k: median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
+            s.values[f"{ctx.scalar_variant}: {pair.label}"] = f"{ratio:.2f}×"
             goal = f"≤ {TARGET_SCALAR:g}" if pair.target else "—"
             table.append((pair.label, f"{ctx.scalar_variant} ({results['plugin'].arrangement})",
                           f"{per['plugin']:.0f} ns", f"{per['built-in']:.0f} ns",
@@ -254,6 +256,11 @@ def section(ctx: Context) -> Section:
     floor = scalar_floor(ctx)
     calls = scalar_calls(ctx)
     many = many_materials(ctx, s)
+    s.values.update({f"threads: {m}, {n}": t for m, n, t in threads})
+    s.values.update({f"floor: {label}": ratio.strip("*") for label, _, ratio in floor})
+    s.values.update({f"call: {label}, {call}": t for label, call, t in calls})
+    ratios = [float(row[-1].strip("*×")) for row in many]
+    s.values["instances: range"] = f"{min(ratios):.3f}–{max(ratios):.3f}×"
     s.markdown = "\n".join([
         "Render time with every surface (Cornell box: `scenes/cbox.xml`) or every metal "
         "(`scenes/metalbox.xml`) the plugin, against the built-in (for Phong: against "

@@ -103,6 +103,14 @@ def measure(strategies: dict, ctx: Context) -> dict:
                 float(np.mean(tracing[k]))) for k in strategies}
 
 
+def _two_digits(x: float) -> str:
+    """``x`` to two significant digits, without an exponent (5.2, 23, 1900)."""
+    if not math.isfinite(x) or x <= 0:
+        return f"{x:g}"
+    rounded = round(x, 1 - math.floor(math.log10(x)))
+    return f"{rounded:.{max(1 - math.floor(math.log10(rounded)), 0)}f}"
+
+
 def section(ctx: Context) -> Section:
     s = Section("Sampling strategies")
     rows = []
@@ -116,12 +124,17 @@ def section(ctx: Context) -> Section:
         eff = {k: 1.0 / (v * t) if v > 0 else math.inf for k, (v, t, _) in m.items()}
         winner = max((k for k in eff if not k.startswith("built-in")), key=eff.get)
         best, default = eff[winner], next(iter(ours))
+        for k in eff:
+            if k != default and not k.startswith("built-in"):
+                s.values[f"efficiency: {label}, {default} vs {k}"] = \
+                    f"{_two_digits(eff[default] / eff[k])}×"
         for k, (v, t, tr) in m.items():
             ref = eff.get(f"built-in {k}")
             rows.append((label, k, f"{v:.3g}", f"{t * 1e3:.2f} ms", f"{tr * 1e3:.2f} ms",
                          f"{eff[k]:.3g}", f"{eff[k] / best:.2f}",
                          f"{eff[k] / ref:.2f}" if ref else "—"))
             if ref:
+                s.values[f"efficiency vs the built-in: {label}, {k}"] = f"{eff[k] / ref:.2f}×"
                 s.rows.append(Row(f"{label}, {k}", "efficiency vs the built-in's same sampler",
                                   f"{eff[k] / ref:.2f}×", "≥ 1.0×", eff[k] / ref >= 1.0))
         s.rows.append(Row(label, "the plugin's default sample() is the most efficient strategy",

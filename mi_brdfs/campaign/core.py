@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..checks.result import CheckResult
-from ..errors import MiBrdfsWarning
+from ..errors import MiBrdfsError, MiBrdfsWarning
 from ..progress import Progress
 
 
@@ -94,6 +94,9 @@ class Section:
     markdown: str = ""
     rows: list = field(default_factory=list)
     seconds: float = 0.0
+    #: Named figures, formatted as the report prints them, for documents that quote the report
+    #: (:func:`fill_quotes`).
+    values: dict = field(default_factory=dict)
 
 
 def _fmt(value) -> str:
@@ -116,8 +119,12 @@ def image(ctx: Context, path: Path, alt: str) -> str:
 def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs validation report",
         filename: str = "REPORT.md", command: str = "mi-brdfs validate",
         make_target: str = "make validate", what: str = "checks",
-        quick_note: str = "fewer samples and parameters") -> tuple[Path, list[Section]]:
-    """Run the sections in order and write the report; returns its path and the sections."""
+        quick_note: str = "fewer samples and parameters") -> tuple[Path, list[Section], dict]:
+    """
+    Run the sections in order and write the report; returns its path, the sections and the
+    named figures of them all (:attr:`Section.values`, with the run's ``run: minutes`` and
+    ``run: as expected``).
+    """
     import drjit as dr
     import mitsuba as mi
 
@@ -181,7 +188,11 @@ def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs va
     from ..imageio import atomic_path
     with atomic_path(report, ".md") as tmp:
         Path(tmp).write_text("\n".join(head + body))
-    return report, done
+    values = {"run: minutes": f"{total / 60:.1f}",
+              "run: as expected": f"{len(rows) - len(failed)} of {len(rows)}"}
+    for s in done:
+        values.update(s.values)
+    return report, done, values
 
 
 def _per_subject(rows) -> list:
@@ -201,3 +212,31 @@ def _per_subject(rows) -> list:
 def _anchor(title: str) -> str:
     keep = [c.lower() if c.isalnum() else "-" if c in " -" else "" for c in title]
     return "".join(keep)
+
+
+#: A quoted figure in a Markdown document: ``<!-- TAG: KEY -->VALUE<!-- /TAG -->``, on one line
+#: (HTML comments do not show in rendered Markdown, in a table cell either).
+_QUOTE = r"<!-- {tag}: ([^>]+?) -->(.*?)<!-- /{tag} -->"
+
+
+def fill_quotes(path: Path, values: dict, tag: str) -> int:
+    """
+    Replace every quoted figure of ``tag`` in the Markdown file ``path`` by the value of its key
+    in ``values``; returns how many there were. A key that ``values`` lacks is an error (naming
+    every such key), and then the file is left as it was; it is rewritten atomically.
+    """
+    from ..imageio import atomic_path
+
+    path = Path(path)
+    text = path.read_text()
+    pattern = re.compile(_QUOTE.format(tag=re.escape(tag)))
+    keys = [m.group(1) for m in pattern.finditer(text)]
+    unknown = sorted(set(keys) - set(values))
+    if unknown:
+        raise MiBrdfsError(f"{path}: quotes figures this run did not measure: "
+                           f"{', '.join(repr(k) for k in unknown)}")
+    filled = pattern.sub(lambda m: f"<!-- {tag}: {m.group(1)} -->{values[m.group(1)]}"
+                                   f"<!-- /{tag} -->", text)
+    with atomic_path(path, ".md") as tmp:
+        Path(tmp).write_text(filled)
+    return len(keys)
