@@ -37,7 +37,7 @@ def main(argv=None) -> None:
     args = p.parse_args(argv)
     mi_brdfs.use_variant("llvm_ad_rgb")
     from mi_brdfs.benchmark.strategies import LOBES, _draws, own
-    from mi_brdfs.benchmark.timing import interleaved, kernel_timed, traced_kernels
+    from mi_brdfs.benchmark.timing import interleaved, kernel_ir, kernel_timed, traced_kernels
     from mi_brdfs.bsdfspec import load_bsdf
 
     # the Smith lobe of the benchmark's strategies, the plugin's and the built-in's samplers
@@ -57,8 +57,7 @@ def main(argv=None) -> None:
         _, history = traced_kernels(lambda b=b: own(b, *draws))
         count = Counter()
         for k in history:
-            ir = k["ir"].getvalue() if hasattr(k["ir"], "getvalue") else str(k["ir"])
-            count += ops(ir)
+            count += ops(kernel_ir(k))
         kernels = statistics.median(kt for _, kt in times[name]) * 1e3
         tracing = statistics.median(tt for tt, _ in times[name]) * 1e3
         total = sum(k.get("operation_count", 0) for k in history)

@@ -52,6 +52,13 @@ def traced_kernels(fn: Callable) -> tuple[float, list]:
     return tracing, kernels
 
 
+def kernel_ir(record: dict) -> str:
+    """The LLVM IR of a kernel-history record of :func:`traced_kernels` ('' when it has none;
+    DrJit keeps it as a StringIO)."""
+    ir = record.get("ir", "")
+    return ir.getvalue() if hasattr(ir, "getvalue") else str(ir)
+
+
 def kernel_timed(fn: Callable) -> tuple[float, float]:
     """(tracing, kernels) seconds of :func:`traced_kernels`: the kernels' execution time, the
     cost that grows with the number of lanes."""
