@@ -2,15 +2,19 @@
 Registration of the package's plugins with Mitsuba, in every variant.
 
 ``mi.BSDF`` is a different class in each variant, and ``mi.register_bsdf`` registers for the
-*current* variant only. So each plugin module has a ``build()`` function that defines the plugin
-class on the current variant's ``mi.BSDF``; :func:`register` calls it once per variant, and a
-Mitsuba variant callback calls :func:`register` again after every later ``mi.set_variant``.
+*current* variant only. Each plugin module defines its class at module level on the current
+variant's ``mi.BSDF``, as Mitsuba's own Python plugins do; :func:`register` executes the module
+afresh once per variant (a new module object each time, so that the classes of earlier variants
+keep their own module globals) and registers the class it defines. A Mitsuba variant callback
+calls :func:`register` again after every later ``mi.set_variant``.
 """
 
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import os
+import sys
 import warnings
 
 import drjit as dr
@@ -19,18 +23,18 @@ import mitsuba as mi
 from . import _env
 from .errors import MiBrdfsError, MiBrdfsWarning
 
-#: Plugin id -> module whose ``build()`` returns the plugin class for the current variant.
+#: Plugin id -> (module, name of the plugin class it defines).
 PLUGINS = {
-    "lambert": "mi_brdfs.plugins.lambert",
-    "phong": "mi_brdfs.plugins.phong",
-    "cooktorrance": "mi_brdfs.plugins.cooktorrance",
+    "lambert": ("mi_brdfs.plugins.lambert", "Lambert"),
+    "phong": ("mi_brdfs.plugins.phong", "Phong"),
+    "cooktorrance": ("mi_brdfs.plugins.cooktorrance", "CookTorrance"),
 }
 
 # variant -> {plugin id -> class}
 _classes: dict[str, dict[str, type]] = {}
 
 
-def _builtin_plugin_names() -> set[str]:
+def builtin_plugin_names() -> set[str]:
     """Names of Mitsuba's own plugins (one shared library each), which we must never shadow."""
     folder = os.path.join(os.path.dirname(mi.__file__), "plugins")
     try:
@@ -52,16 +56,36 @@ def register() -> list[str]:
     if variant is None:
         return []
     if variant not in _classes:
-        builtins = _builtin_plugin_names()
+        builtins = builtin_plugin_names()
         classes = {}
-        for name, module in PLUGINS.items():
+        for name, (module, class_name) in PLUGINS.items():
             if name in builtins:  # would silently replace Mitsuba's plugin for this variant
                 raise RuntimeError(f"mi_brdfs: plugin id '{name}' shadows a Mitsuba built-in")
-            cls = importlib.import_module(module).build()
+            cls = getattr(_load_for_variant(module), class_name)
             mi.register_bsdf(name, cls)
             classes[name] = cls
         _classes[variant] = classes
     return sorted(_classes[variant])
+
+
+def _load_for_variant(name: str):
+    """
+    Execute module ``name`` into a new module object for the current variant and make it the
+    one ``import`` returns from now on (as re-importing a Mitsuba Python plugin does).
+    """
+    spec = importlib.util.find_spec(name)
+    module = importlib.util.module_from_spec(spec)
+    previous = sys.modules.get(name)
+    sys.modules[name] = module  # a module may import itself (dataclasses, pickling)
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        if previous is not None:
+            sys.modules[name] = previous
+        else:
+            del sys.modules[name]
+        raise
+    return module
 
 
 def registered_variants() -> list[str]:

@@ -32,8 +32,8 @@ def test03_register_is_idempotent(variants_rgb):
 
 
 def test04_no_builtin_is_shadowed(variants_rgb):
-    from mi_brdfs.registry import _builtin_plugin_names
-    builtins = _builtin_plugin_names()
+    from mi_brdfs.registry import builtin_plugin_names
+    builtins = builtin_plugin_names()
     assert {"diffuse", "roughconductor", "dielectric"} <= builtins
     assert not builtins & set(mi_brdfs.PLUGINS)
     assert type(mi.load_dict({"type": "diffuse"})).__module__.startswith("mitsuba")
@@ -82,3 +82,41 @@ def test07_polarized_variants_render_like_diffuse():
                 "film": {"type": "hdrfilm", "width": 8, "height": 8}}})
         images.append(np.array(mi.render(scene, spp=4, seed=1)))
     np.testing.assert_allclose(images[0], images[1], atol=1e-5)
+
+
+SWITCH = r"""
+import sys
+import mitsuba as mi
+import mi_brdfs
+mi.set_variant('scalar_rgb')
+import mi_brdfs.plugins.cooktorrance as ct_scalar
+scalar = mi.load_dict({'type': 'cooktorrance', 'alpha': 0.3})
+mi.set_variant('SECOND')
+import mi_brdfs.plugins.cooktorrance as ct_second
+assert ct_second is not ct_scalar and ct_second is sys.modules['mi_brdfs.plugins.cooktorrance']
+assert ct_second.CookTorrance is mi_brdfs.plugin_class('cooktorrance')
+assert issubclass(ct_second.CookTorrance, mi.BSDF)
+assert ct_scalar.CookTorrance.__module__ == 'mi_brdfs.plugins.cooktorrance'
+assert not ct_scalar.V.jit and ct_second.V.jit == SECOND_JIT
+# the scalar object still evaluates with its own variant's module globals
+mi.set_variant('scalar_rgb')
+si = mi.SurfaceInteraction3f()
+si.wi = mi.Vector3f(0, 0, 1)
+value = scalar.eval(mi.BSDFContext(), si, mi.Vector3f(0, 0, 1))
+assert 0 < value[0] < 10, value
+print('OK')
+"""
+
+
+def test08_plugin_classes_live_at_module_level_per_variant():
+    """
+    The plugin class is defined at module level (importable, inspectable: ``CookTorrance``
+    in ``mi_brdfs.plugins.cooktorrance``); registration executes the module afresh per variant,
+    so that ``import`` gives the current variant's class while objects of an earlier variant
+    keep working with their own module's globals.
+    """
+    second, jit = ("llvm_ad_rgb", "True") if LLVM_OK else ("scalar_spectral", "False")
+    code = SWITCH.replace("SECOND_JIT", jit).replace("SECOND", second)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "OK" in proc.stdout

@@ -174,13 +174,9 @@ CALLS = [("lambert", {"type": "lambert"}), ("diffuse", {"type": "diffuse"}),
 def scalar_calls(ctx: Context) -> list:
     """
     µs per call from Python of eval_pdf and sample (what Mitsuba calls per path vertex) of each
-    of :data:`CALLS`, and of cooktorrance's float arithmetic alone (the lobe's terms and the
-    exact Fresnel of three channels: the least any call of it has to compute), interleaved.
+    of :data:`CALLS`, interleaved.
     """
     from ..bsdfspec import load_bsdf
-    from ..plugins.cooktorrance import conductor_ior
-    from ..scattering import fresnel
-    from ..scattering import microfacet as mf
     with ctx.scalar():
         n = ctx.n(20_000, 1_000)
         si = mi.SurfaceInteraction3f()
@@ -191,16 +187,6 @@ def scalar_calls(ctx: Context) -> list:
             b = load_bsdf(spec)
             calls[(label, "eval_pdf")] = lambda b=b: [b.eval_pdf(c, si, wo) for _ in range(n)]
             calls[(label, "sample")] = lambda b=b: [b.sample(c, si, 0.4, u) for _ in range(n)]
-        wi_, wo_ = (0.3, 0.2, 0.932738), (0.1, 0.4, 0.910465)
-        # Python floats, as the plugin holds them (NumPy scalars would be 2× slower here)
-        consts = [fresnel.channel_constants(float(e), float(k))
-                  for e, k in zip(*conductor_ior("Au"))]
-
-        def arithmetic():
-            for _ in range(n):
-                mf.reflection_floats("beckmann", True, True, 0.2, wi_, wo_)
-                fresnel.exact_channels(0.9, consts)
-        calls[("cooktorrance (Smith)", "its arithmetic alone")] = arithmetic
         times = interleaved(calls, repeats=ctx.n(5, 2))
         return [(label, call, f"{median(t) / n * 1e6:.2f} µs")
                 for (label, call), t in times.items()]

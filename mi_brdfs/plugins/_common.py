@@ -17,6 +17,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import Description, ParameterError
+from ..scattering import floats
 
 # -------------------------------------------------------------------------------------------------
 # Variant primitives
@@ -25,17 +26,27 @@ from ..errors import Description, ParameterError
 
 def variant_tools() -> SimpleNamespace:
     """
-    Primitives for the current variant, looked up once when a plugin class is built.
+    The few primitives whose best form differs between scalar and JIT variants, for the
+    current variant (a plugin module calls this once at import: :mod:`mi_brdfs.registry`
+    imports it afresh in every variant).
 
-    In JIT variants ``select`` is ``dr.select`` and a new ``BSDFSample3f`` must come from
-    ``dr.zeros`` (a default-constructed one has width-0 fields that fail in ``mi.render``).
-    In scalar variants every BSDF call comes from C++ once per ray, so per-call cost is what
-    matters: ``dr.select`` on a Spectrum and ``dr.zeros(BSDFSample3f)`` cost about 1 µs each
-    there, a Python conditional and the (zero-initialised) default constructor 0.1 µs.
+    In JIT variants a BSDF method is traced once for all lanes: ``select`` is ``dr.select``,
+    both branches of ``choose`` are traced, and a new ``BSDFSample3f`` must come from
+    ``dr.zeros`` (a default-constructed one has width-0 fields that fail in ``mi.render``). In
+    scalar variants Mitsuba calls the method once per ray with Python floats and bools, so a
+    Python conditional picks the one branch needed and ``none`` allows an early return.
     """
     jit = dr.is_jit_v(mi.Float)
     if jit:
-        select = dr.select
+        def select(mask, a, b):
+            return dr.select(mask, a, b)
+
+        def choose(mask, a, b):
+            """select(mask, a(), b()): both are traced, as every lane may need either (only
+            one where ``mask`` is a Python bool)."""
+            if type(mask) is bool:
+                return a() if mask else b()
+            return dr.select(mask, a(), b())
 
         def new_sample():
             return dr.zeros(mi.BSDFSample3f)
@@ -46,20 +57,59 @@ def variant_tools() -> SimpleNamespace:
         def select(mask, a, b):
             return a if mask else type(a)(b)
 
+        def choose(mask, a, b):
+            """select(mask, a(), b()), computing only the one needed."""
+            return a() if mask else b()
+
         new_sample = mi.BSDFSample3f
 
         def none(mask):
             return not mask
+
+    colour = mi.UnpolarizedSpectrum
+
+    def terms(module):
+        """A module of :mod:`mi_brdfs.scattering` as this variant runs it: itself in JIT
+        variants, compiled for Python floats in scalar ones (:mod:`~mi_brdfs.scattering.floats`)."""
+        return module if jit else floats.specialise(module)
+
+    def spectrum(value):
+        """A spectrum, or a colour from a list of per-channel floats."""
+        return colour(*value) if type(value) is list else value
+
+    def scale(value, a, b=1.0):
+        """(value·a)·b for a spectrum, or for a list of per-channel floats (a constant
+        spectrum read by :func:`constant_channels`), which gives one colour."""
+        if type(value) is list:
+            return colour(*[c * a * b for c in value])
+        return value * a * b
+
     return SimpleNamespace(
         jit=jit,
         select=select,
+        choose=choose,
         new_sample=new_sample,
-        # Mitsuba's dr::none_or<false>(mask): true only where it is known that no lane is active,
-        # i.e. in scalar variants for a false mask; an early return there saves the rest.
+        # Mitsuba's dr::none_or<false>(mask): true only where it is known that no lane is
+        # active, i.e. in scalar variants for a false mask; an early return there saves the rest.
         none=none,
+        # Whether a constant spectrum can be read once as per-channel Python floats (scalar RGB
+        # and mono variants; spectral ones evaluate spectra at each call's wavelengths), so that
+        # the terms run on floats and one colour is built per call.
+        per_channel=not jit and not mi.is_spectral,
+        scale=scale,
+        terms=terms,
+        spectrum=spectrum,
         # Mueller matrices in polarized variants; the identity elsewhere.
         depolarize=mi.depolarizer if mi.is_polarized else (lambda value: value),
     )
+
+
+def constant_channels(tex) -> list[float] | None:
+    """A constant texture's value per channel as Python floats (where
+    ``variant_tools().per_channel``), else None."""
+    if tex.is_spatially_varying():
+        return None
+    return [float(c) for c in mi.unpolarized_spectrum(tex.eval(mi.SurfaceInteraction3f()))]
 
 
 def flag(*names: str) -> int:
@@ -82,10 +132,6 @@ def _types():
     if _T is None:
         _T = mi.Properties.Type
     return _T
-
-
-def _finite_in(x: float, lo: float, hi: float) -> bool:
-    return math.isfinite(x) and lo <= x <= hi
 
 
 def _as_float(value) -> float:

@@ -12,6 +12,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import ParameterError
+from ..scattering import mixture
 from ..scattering import phong as lobes
 from . import _common
 
@@ -66,300 +67,271 @@ def _warn_energy(props, diffuse, specular) -> None:
                              f"(its albedo at normal incidence is their sum); values kept")
 
 
-def build() -> type:
-    """Define the ``phong`` plugin class on the current variant's ``mi.BSDF``."""
-    tools = _common.variant_tools()
-    select, new_sample, none, depolarize, jit = (tools.select, tools.new_sample, tools.none,
-                                                tools.depolarize, tools.jit)
-    DIFFUSE, GLOSSY = _common.flag("DiffuseReflection"), _common.flag("GlossyReflection")
-    FRONT, NONSYMMETRIC = _common.flag("FrontSide"), _common.flag("NonSymmetric")
-    # Bound once: scalar variants call these per ray, and each `mi.` lookup costs ~0.1 µs there.
-    Spectrum, Float, UInt32 = mi.Spectrum, mi.Float, mi.UInt32
-    IMPORTANCE = mi.TransportMode.Importance
-    cosine_hemisphere = mi.warp.square_to_cosine_hemisphere
-    maximum = dr.maximum
-    INV_PI = dr.inv_pi
+V = _common.variant_tools()
+# Bound once per variant: in scalar variants these are looked up at every call otherwise.
+Spectrum, Float, UInt32 = mi.Spectrum, mi.Float, mi.UInt32
+cosine_hemisphere = mi.warp.square_to_cosine_hemisphere
+IMPORTANCE = mi.TransportMode.Importance
+DIFFUSE, GLOSSY = _common.flag("DiffuseReflection"), _common.flag("GlossyReflection")
+FRONT, NONSYMMETRIC = _common.flag("FrontSide"), _common.flag("NonSymmetric")
 
-    if jit:
-        def choose(mask, a, b):
-            """select(mask, a(), b()): both are traced, as every lane may need either."""
-            return dr.select(mask, a(), b())
-    else:
-        def choose(mask, a, b):
-            """select(mask, a(), b()), computing only the one needed (per-ray calls in scalar)."""
-            return a() if mask else b()
 
-    def constants(form, lobe, n):
-        """(n, 1/(n+1), specular factor, pdf factor (n+1)/(2π)) of the lobe, per lane of n."""
-        # values set through mi.traverse are not validated: clamp them into the accepted range
-        n = dr.clip(n, 0.0, EXPONENT_MAX)
-        return (n, 1.0 / (n + 1.0), lobes.specular_normalization(form, lobe, n),
-                lobes.pdf_normalization(n))
+def constants(form, lobe, n):
+    """(n, 1/(n+1), specular factor, pdf factor (n+1)/(2π)) of the lobe, per lane of n."""
+    # values set through mi.traverse are not validated: clamp them into the accepted range
+    n = dr.clip(n, 0.0, EXPONENT_MAX)
+    return (n, 1.0 / (n + 1.0), lobes.specular_normalization(form, lobe, n),
+            lobes.pdf_normalization(n))
 
-    class Phong(mi.BSDF):
-        r"""
-        .. _bsdf-phong:
 
-        Phong reflectance in the lecture's three forms (:monosp:`phong`)
-        ----------------------------------------------------------------
+class Phong(mi.BSDF):
+    r"""
+    .. _bsdf-phong:
 
-        .. pluginparameters::
+    Phong reflectance in the lecture's three forms (:monosp:`phong`)
+    ----------------------------------------------------------------
 
-         * - diffuse_reflectance
-           - |spectrum| or |texture|
-           - Diffuse albedo ρd, finite and within [0, 1] (Default: 0.5)
-           - |exposed|, |differentiable|
+    .. pluginparameters::
 
-         * - specular_reflectance
-           - |spectrum| or |texture|
-           - Specular reflectance ks, finite and within [0, 1] (Default: 0.2)
-           - |exposed|, |differentiable|
+     * - diffuse_reflectance
+       - |spectrum| or |texture|
+       - Diffuse albedo ρd, finite and within [0, 1] (Default: 0.5)
+       - |exposed|, |differentiable|
 
-         * - exponent
-           - |float| or |texture|
-           - Phong exponent n, finite and within [0, 1e30]; 0 is a uniform lobe (Default: 30)
-           - |exposed| (JIT variants, or as a texture), |differentiable|
+     * - specular_reflectance
+       - |spectrum| or |texture|
+       - Specular reflectance ks, finite and within [0, 1] (Default: 0.2)
+       - |exposed|, |differentiable|
 
-         * - form
-           - |string|
-           - ``normalized`` (energy-conserving, reciprocal), ``lecture`` (f = ks cosⁿα as in the
-             lecture notes) or ``original`` (Phong's 1975 shading model, not reciprocal)
-             (Default: ``normalized``)
-           -
+     * - exponent
+       - |float| or |texture|
+       - Phong exponent n, finite and within [0, 1e30]; 0 is a uniform lobe (Default: 30)
+       - |exposed| (JIT variants, or as a texture), |differentiable|
 
-         * - lobe
-           - |string|
-           - ``mirror``: cos α = R·V (Phong); ``halfway``: cos α = N·H (Blinn-Phong)
-             (Default: ``mirror``)
-           -
+     * - form
+       - |string|
+       - ``normalized`` (energy-conserving, reciprocal), ``lecture`` (f = ks cosⁿα as in the
+         lecture notes) or ``original`` (Phong's 1975 shading model, not reciprocal)
+         (Default: ``normalized``)
+       -
 
-        With L the direction towards the light, V towards the viewer, R the mirror image of L
-        and H = (L + V)/|L + V|:
+     * - lobe
+       - |string|
+       - ``mirror``: cos α = R·V (Phong); ``halfway``: cos α = N·H (Blinn-Phong)
+         (Default: ``mirror``)
+       -
 
-        .. math::
+    With L the direction towards the light, V towards the viewer, R the mirror image of L
+    and H = (L + V)/|L + V|:
 
-            f_\text{normalized} &= \frac{\rho_d}{\pi} + k_s\,c_n \cos^n\alpha, &
-            c_n &= \frac{n+2}{2\pi}\ \text{(mirror)},\
-                   \frac{(n+2)(n+4)}{8\pi\,(n + 2^{-n/2})}\ \text{(halfway)} \\
-            f_\text{lecture} &= \frac{\rho_d}{\pi} + k_s \cos^n\alpha, \qquad
-            f_\text{original} = \frac{\rho_d}{\pi} + k_s \frac{\cos^n\alpha}{N\cdot L}
+    .. math::
 
-        with cos α = max(0, R·V) or max(0, N·H). ``eval`` returns f·cosθo. The ``normalized``
-        specular lobe reflects exactly ks at normal incidence (Lafortune & Willems 1994; Giesen
-        2009 for the halfway lobe), so the model conserves energy iff ρd + ks ≤ 1 (a warning
-        says so otherwise, values kept). ``lecture`` and ``original`` are the unnormalized forms
-        of the notes: their specular albedo at normal incidence is 2πks/(n+2) and 2πks/(n+1)
-        (mirror lobe), above ks for small n. ``original`` is not reciprocal: the plugin declares
-        ``NonSymmetric`` and keeps L the light side in both transport modes (radiance: L = ωo,
-        V = ωi; importance: L = ωi, V = ωo, with 1/(N·L) floored at N·L = 1e-4, where the
-        model itself diverges). There is no ambient term and no distance
-        attenuation: in a path tracer the environment and the light transport provide them (an
-        ``ambient`` property is rejected: use ``<emitter type="constant">``).
+        f_\text{normalized} &= \frac{\rho_d}{\pi} + k_s\,c_n \cos^n\alpha, &
+        c_n &= \frac{n+2}{2\pi}\ \text{(mirror)},\
+               \frac{(n+2)(n+4)}{8\pi\,(n + 2^{-n/2})}\ \text{(halfway)} \\
+        f_\text{lecture} &= \frac{\rho_d}{\pi} + k_s \cos^n\alpha, \qquad
+        f_\text{original} = \frac{\rho_d}{\pi} + k_s \frac{\cos^n\alpha}{N\cdot L}
 
-        A lobe whose reflectance is the constant 0 is left out entirely (flags, components,
-        sampling, cost): ks = 0 gives a diffuse-only BSDF, ρd = 0 a glossy-only one.
+    with cos α = max(0, R·V) or max(0, N·H). ``eval`` returns f·cosθo. The ``normalized``
+    specular lobe reflects exactly ks at normal incidence (Lafortune & Willems 1994; Giesen
+    2009 for the halfway lobe), so the model conserves energy iff ρd + ks ≤ 1 (a warning
+    says so otherwise, values kept). ``lecture`` and ``original`` are the unnormalized forms
+    of the notes: their specular albedo at normal incidence is 2πks/(n+2) and 2πks/(n+1)
+    (mirror lobe), above ks for small n. ``original`` is not reciprocal: the plugin declares
+    ``NonSymmetric`` and keeps L the light side in both transport modes (radiance: L = ωo,
+    V = ωi; importance: L = ωi, V = ωo, with 1/(N·L) floored at N·L = 1e-4, where the
+    model itself diverges). There is no ambient term and no distance
+    attenuation: in a path tracer the environment and the light transport provide them (an
+    ``ambient`` property is rejected: use ``<emitter type="constant">``).
 
-        **Sampling.** ``sample()`` picks the diffuse lobe (cosine-weighted hemisphere) or the
-        specular one (cos α = u^(1/(n+1)) about R; for the halfway lobe H about N, then
-        reflected, Jacobian 1/(4 V·H)) in proportion to their albedos at normal incidence with
-        the textures' mean values; ``pdf()`` and ``bs.pdf`` are the mixture density, and
-        samples below the horizon have weight 0. Every form samples the same way.
+    A lobe whose reflectance is the constant 0 is left out entirely (flags, components,
+    sampling, cost): ks = 0 gives a diffuse-only BSDF, ρd = 0 a glossy-only one.
 
-        **Float32.** The lobe is evaluated as exp(n·log1p(−(1 − cos α))) with 1 − cos α free of
-        cancellation, and sampled with expm1 (:mod:`mi_brdfs.scattering.phong`). Measured in
-        ``llvm_ad_rgb`` against the float64 reference at the same float32 directions, across
-        the lobe at 45° incidence (``validation/phong_float32.py``):
+    **Sampling.** ``sample()`` picks the diffuse lobe (cosine-weighted hemisphere) or the
+    specular one (cos α = u^(1/(n+1)) about R; for the halfway lobe H about N, then
+    reflected, Jacobian 1/(4 V·H)) in proportion to their albedos at normal incidence with
+    the textures' mean values; ``pdf()`` and ``bs.pdf`` are the mixture density, and
+    samples below the horizon have weight 0. Every form samples the same way.
 
-        * mirror-lobe ``eval`` within 1e-5 (relative) for every n up to 1e10; the textbook
-          pow(R·V, n) is off by 7e-3 at n = 1e5, 4 % at 1e6 and 50 % at 1e7;
-        * halfway-lobe ``eval`` within 2e-4 at n = 1e6, 2e-3 at 1e8, 1.4e-2 at 1e10: the
-          half-vector of two float32 unit vectors, whose norms differ from 1 by up to 6e-8, is
-          itself uncertain by about 3e-8 rad (a relative error of about sqrt(2n·x)·3e-8 where
-          cosⁿ = e^−x);
-        * sampled directions follow the exact lobe (Kolmogorov-Smirnov test, 1e6 samples) up to
-          n = 1e10, and none collapses onto R at any n; the textbook sampler collapses 3 % of
-          its samples onto R at n = 1e6, 26 % at 1e7 and 95 % at 1e8.
+    **Float32.** The lobe is evaluated as exp(n·log1p(−(1 − cos α))) with 1 − cos α free of
+    cancellation, and sampled with expm1 (:mod:`mi_brdfs.scattering.phong`), so that ``eval``
+    and the sampled directions follow the float64 lobe far beyond the exponents where the
+    textbook pow(R·V, n) and sqrt(1 − cos²θ) break down; ``validation/phong_float32.py``
+    measures both against the float64 reference, exponent by exponent (``python
+    validation/phong_float32.py``; the README quotes its table). The halfway lobe is less precise than the mirror lobe at large n:
+    the half-vector of two float32 unit vectors is itself uncertain by about 3e-8 rad. Beyond
+    n ≈ 1e12 the lobe (about sqrt(2/n) rad wide) spans only a few float32 directions: sampled
+    directions snap to them and the lobe's shape is lost, but weights and densities stay
+    consistent, so the plugin acts as a mirror of reflectance ks·cosθo (normalized form), with
+    no NaN, Inf or negative value anywhere (grazing, V = −L, N·L → 0) up to n = 1e30.
 
-        Beyond n ≈ 1e12 the lobe (sqrt(2/n) ≈ 1e-6 rad wide) spans only a few float32
-        directions: sampled directions snap to them and the lobe's shape is lost (KS distance
-        0.1 at 1e14), but weights and densities stay consistent, so the plugin acts as a
-        mirror of reflectance ks·cosθo (normalized form): its sampled albedo matches the
-        reference to 1e-5 up to the largest exponent, 1e30, with no NaN, Inf or negative value
-        anywhere (grazing, V = −L, N·L → 0).
+    .. tabs::
+        .. code-tab:: xml
 
-        .. tabs::
-            .. code-tab:: xml
+            <bsdf type="phong">
+                <rgb name="diffuse_reflectance" value="0.4, 0.1, 0.1"/>
+                <float name="specular_reflectance" value="0.5"/>
+                <float name="exponent" value="100"/>
+                <string name="lobe" value="halfway"/>
+            </bsdf>
 
-                <bsdf type="phong">
-                    <rgb name="diffuse_reflectance" value="0.4, 0.1, 0.1"/>
-                    <float name="specular_reflectance" value="0.5"/>
-                    <float name="exponent" value="100"/>
-                    <string name="lobe" value="halfway"/>
-                </bsdf>
+        .. code-tab:: python
 
-            .. code-tab:: python
+            {'type': 'phong', 'diffuse_reflectance': {'type': 'rgb', 'value': [0.4, 0.1, 0.1]},
+             'specular_reflectance': 0.5, 'exponent': 100.0, 'lobe': 'halfway'}
+    """
 
-                {'type': 'phong', 'diffuse_reflectance': {'type': 'rgb', 'value': [0.4, 0.1, 0.1]},
-                 'specular_reflectance': 0.5, 'exponent': 100.0, 'lobe': 'halfway'}
-        """
+    def __init__(self, props):
+        super().__init__(props)
+        _common.reject(props, PLUGIN, "ambient", AMBIENT_HINT)
+        #: ``normalized``, ``lecture`` or ``original``
+        self.m_form = _common.choice(props, PLUGIN, "form", "normalized", lobes.FORMS)
+        #: ``mirror`` or ``halfway``
+        self.m_lobe = _common.choice(props, PLUGIN, "lobe", "mirror", lobes.LOBES)
+        #: Diffuse albedo ρd and specular reflectance ks.
+        self.m_diffuse_reflectance = _common.reflectance(props, PLUGIN, "diffuse_reflectance",
+                                                         0.5)
+        self.m_specular_reflectance = _common.reflectance(props, PLUGIN,
+                                                          "specular_reflectance", 0.2)
+        #: Exponent n: a float (a Float in JIT variants, to be updatable) or a texture.
+        exponent = _exponent(props)
+        self._textured_exponent = isinstance(exponent, mi.Texture)
+        self.m_exponent = (exponent if self._textured_exponent or not V.jit
+                           else Float(exponent))
+        if self.m_form == "normalized":
+            _warn_energy(props, self.m_diffuse_reflectance, self.m_specular_reflectance)
 
-        def __init__(self, props):
-            super().__init__(props)
-            _common.reject(props, PLUGIN, "ambient", AMBIENT_HINT)
-            #: ``normalized``, ``lecture`` or ``original``
-            self.m_form = _common.choice(props, PLUGIN, "form", "normalized", lobes.FORMS)
-            #: ``mirror`` or ``halfway``
-            self.m_lobe = _common.choice(props, PLUGIN, "lobe", "mirror", lobes.LOBES)
-            #: Diffuse albedo ρd and specular reflectance ks.
-            self.m_diffuse_reflectance = _common.reflectance(props, PLUGIN, "diffuse_reflectance",
-                                                             0.5)
-            self.m_specular_reflectance = _common.reflectance(props, PLUGIN,
-                                                              "specular_reflectance", 0.2)
-            #: Exponent n: a float (a Float in JIT variants, to be updatable) or a texture.
-            exponent = _exponent(props)
-            self._textured_exponent = isinstance(exponent, mi.Texture)
-            self.m_exponent = exponent if self._textured_exponent or not jit else Float(exponent)
-            if self.m_form == "normalized":
-                _warn_energy(props, self.m_diffuse_reflectance, self.m_specular_reflectance)
+        # Lobes in component order; one whose reflectance is the constant 0 is left out.
+        self._diffuse = self._glossy = None  # component indices
+        components = []
+        if not _common.is_zero(self.m_diffuse_reflectance):
+            self._diffuse = len(components)
+            components.append(DIFFUSE | FRONT)
+        if not _common.is_zero(self.m_specular_reflectance):
+            self._glossy = len(components)
+            components.append(GLOSSY | FRONT | (NONSYMMETRIC if self.m_form == "original" else 0))
+        self.m_components = components
+        self.m_flags = 0
+        for c in components:
+            self.m_flags |= c
+        mirror = self.m_lobe == "mirror"
+        self._lobe_value = lobes.mirror_lobe if mirror else lobes.halfway_lobe
+        self._lobe_sample = lobes.sample_mirror if mirror else lobes.sample_halfway
+        self.parameters_changed([])
 
-            # Lobes in component order; one whose reflectance is the constant 0 is left out.
-            self._diffuse = self._glossy = None  # component indices
-            components = []
-            if not _common.is_zero(self.m_diffuse_reflectance):
-                self._diffuse = len(components)
-                components.append(DIFFUSE | FRONT)
-            if not _common.is_zero(self.m_specular_reflectance):
-                self._glossy = len(components)
-                components.append(GLOSSY | FRONT | (NONSYMMETRIC if self.m_form == "original"
-                                                    else 0))
-            self.m_components = components
-            self.m_flags = 0
-            for c in components:
-                self.m_flags |= c
-            self._lobe_value = lobes.mirror_lobe if self.m_lobe == "mirror" else lobes.halfway_lobe
-            self._lobe_sample = (lobes.sample_mirror if self.m_lobe == "mirror"
-                                 else lobes.sample_halfway)
-            self.parameters_changed([])
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        bs = V.new_sample()
+        has_diffuse, has_glossy = self._enabled(ctx)
+        active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
+        if V.none(active) or not (has_diffuse or has_glossy):
+            return bs, Spectrum(0.0)
+        consts = self._lobe_constants(si, active) if has_glossy else None
 
-        # -- derived values ----------------------------------------------------------------------
+        # ωo from the glossy lobe (cosⁿ about R, or H about N), or the cosine-weighted hemisphere;
+        # with both lobes on, sample1 picks one with probability p_glossy
+        def glossy():
+            return self._lobe_sample(si.wi, sample2, consts[1])
 
-        def parameters_changed(self, keys):
-            """Precompute the lobe constants and the lobe choice probability."""
-            n = self.m_exponent
-            if not self._textured_exponent:
-                self._constants = constants(self.m_form, self.m_lobe, n)
-            n_mean = dr.clip(dr.detach(n.mean() if self._textured_exponent else n), 0.0,
-                             EXPONENT_MAX)
-            # Lobe choice by albedo weights, from the textures' means (as Mitsuba's roughplastic
-            # and Mitsuba 0.6's phong): constant per BSDF, so nothing to evaluate per call.
-            w_d = dr.detach(self.m_diffuse_reflectance.mean())
-            w_s = dr.detach(self.m_specular_reflectance.mean()) * lobes.specular_albedo(
-                self.m_form, self.m_lobe, n_mean)
-            total = w_d + w_s
-            self._p_glossy = Float(select(total > 0, w_s / select(total > 0, total, 1.0), 0.5))
-            self._p_diffuse = 1.0 - self._p_glossy
-            if jit:
-                dr.make_opaque(self._p_glossy, self._p_diffuse,
-                               *([] if self._textured_exponent else self._constants))
+        def diffuse():
+            return cosine_hemisphere(sample2)
 
-        def _lobe_constants(self, si, active):
-            if self._textured_exponent:
-                return constants(self.m_form, self.m_lobe, self.m_exponent.eval_1(si, active))
-            return self._constants
+        pick = (sample1 < self._p_glossy) if has_diffuse and has_glossy else has_glossy
+        bs.wo = V.choose(pick, glossy, diffuse)
+        bs.sampled_type = V.select(pick, UInt32(GLOSSY), UInt32(DIFFUSE))
+        bs.sampled_component = V.select(pick, UInt32(self._glossy or 0),
+                                        UInt32(self._diffuse or 0))
+        bs.eta = 1.0
+        # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
+        value, bs.pdf = self._eval_pdf(ctx, si, bs.wo, active, has_diffuse, has_glossy, consts)
+        ok = active & (bs.pdf > 0)
+        return bs, V.select(ok, value / V.select(ok, bs.pdf, 1.0), 0.0)
 
-        def _enabled(self, ctx):
-            """Which lobes this context asks for: (diffuse, glossy), Python bools."""
-            return (self._diffuse is not None and ctx.is_enabled(DIFFUSE, self._diffuse),
-                    self._glossy is not None and ctx.is_enabled(GLOSSY, self._glossy))
+    def eval(self, ctx, si, wo, active=True):
+        return self.eval_pdf(ctx, si, wo, active)[0]
 
-        # -- the one code path -----------------------------------------------------------------
+    def pdf(self, ctx, si, wo, active=True):
+        return self.eval_pdf(ctx, si, wo, active)[1]
 
-        def _eval_pdf(self, ctx, si, wo, active, has_diffuse, has_glossy, consts=None):
-            """
-            f·cosθo and the mixture pdf of ``sample()`` at ``wo``, for the enabled lobes; the only
-            place with the model's maths (eval, pdf, eval_pdf and sample all come here).
-            """
-            cos_theta_i, cos_theta_o = si.wi.z, wo.z  # local shading frame
-            active = active & (cos_theta_i > 0) & (cos_theta_o > 0)  # one-sided, like `diffuse`
-            if none(active):
-                return Spectrum(0.0), Float(0.0)
-            if has_diffuse:
-                pdf = INV_PI * cos_theta_o  # cosine-weighted hemisphere
-                value = self.m_diffuse_reflectance.eval(si, active) * pdf
-            if has_glossy:
-                n, _, norm, pdf_norm = consts or self._lobe_constants(si, active)
-                lobe, pdf_s = self._lobe_value(si.wi, wo, n, pdf_norm)
-                if self.m_form != "original":
-                    projected = cos_theta_o
-                elif ctx.mode == IMPORTANCE:  # L = ωi: f·cosθo = ks cosⁿα cosθo / (N·L)
-                    projected = cos_theta_o / maximum(cos_theta_i, COS_LIGHT_MIN)
-                else:  # radiance: L = ωo, so f·cosθo = ks cosⁿα cosθo / cosθo
-                    projected = 1.0
-                value_s = self.m_specular_reflectance.eval(si, active) * (norm * lobe * projected)
-                if has_diffuse:  # the mixture of both strategies
-                    value = value + value_s
-                    pdf = self._p_diffuse * pdf + self._p_glossy * pdf_s
-                else:
-                    value, pdf = value_s, pdf_s
-            return select(active, depolarize(value), 0.0), select(active, pdf, 0.0)
+    def eval_pdf(self, ctx, si, wo, active=True):
+        has_diffuse, has_glossy = self._enabled(ctx)
+        if not (has_diffuse or has_glossy):
+            return Spectrum(0.0), Float(0.0)
+        return self._eval_pdf(ctx, si, wo, active, has_diffuse, has_glossy)
 
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            bs = new_sample()
-            has_diffuse, has_glossy = self._enabled(ctx)
-            active = active & (si.wi.z > 0)
-            if none(active) or not (has_diffuse or has_glossy):
-                return bs, Spectrum(0.0)
-            consts = self._lobe_constants(si, active) if has_glossy else None
-            if has_diffuse and has_glossy:
-                glossy = sample1 < self._p_glossy
-                wo = choose(glossy, lambda: self._lobe_sample(si.wi, sample2, consts[1]),
-                            lambda: cosine_hemisphere(sample2))
-                bs.sampled_type = select(glossy, UInt32(GLOSSY), UInt32(DIFFUSE))
-                bs.sampled_component = select(glossy, UInt32(self._glossy),
-                                              UInt32(self._diffuse))
-            elif has_glossy:
-                wo = self._lobe_sample(si.wi, sample2, consts[1])
-                bs.sampled_type, bs.sampled_component = UInt32(GLOSSY), UInt32(self._glossy)
+    def _eval_pdf(self, ctx, si, wo, active, has_diffuse, has_glossy, consts=None):
+        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the enabled lobes."""
+        cos_theta_i, cos_theta_o = si.wi.z, wo.z
+        active = active & (cos_theta_i > 0) & (cos_theta_o > 0)  # one-sided, like `diffuse`
+        if V.none(active):
+            return Spectrum(0.0), Float(0.0)
+        if has_diffuse:
+            # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
+            pdf = dr.inv_pi * cos_theta_o
+            value = self.m_diffuse_reflectance.eval(si, active) * pdf
+        if has_glossy:
+            # ks·c·cosⁿα·cosθo (over N·L for the original form), and the lobe's own density
+            n, _, norm, pdf_norm = consts or self._lobe_constants(si, active)
+            lobe, pdf_s = self._lobe_value(si.wi, wo, n, pdf_norm)
+            value_s = self.m_specular_reflectance.eval(si, active) * (
+                norm * lobe * self._projection(ctx, cos_theta_i, cos_theta_o))
+            if has_diffuse:  # both lobes: their sum, and the mixture of both strategies
+                value, pdf = value + value_s, mixture.pdf(self._p_glossy, pdf_s, pdf)
             else:
-                wo = cosine_hemisphere(sample2)
-                bs.sampled_type, bs.sampled_component = UInt32(DIFFUSE), UInt32(self._diffuse)
-            value, pdf = self._eval_pdf(ctx, si, wo, active, has_diffuse, has_glossy, consts)
-            bs.wo, bs.pdf, bs.eta = wo, pdf, 1.0
-            ok = active & (pdf > 0)  # pdf = 0: below the horizon (weight 0)
-            return bs, select(ok, value / select(ok, pdf, 1.0), 0.0)
+                value, pdf = value_s, pdf_s
+        return V.select(active, V.depolarize(value), 0.0), V.select(active, pdf, 0.0)
 
-        def eval(self, ctx, si, wo, active=True):
-            return self.eval_pdf(ctx, si, wo, active)[0]
+    def _projection(self, ctx, cos_theta_i, cos_theta_o):
+        """cosθo, divided by N·L in the ``original`` form (L: the light's side)."""
+        if self.m_form != "original":
+            return cos_theta_o
+        if ctx.mode == IMPORTANCE:  # L = ωi, floored where the model diverges
+            return cos_theta_o / dr.maximum(cos_theta_i, COS_LIGHT_MIN)
+        return 1.0  # radiance: L = ωo, so cosθo / (N·L) = 1
 
-        def pdf(self, ctx, si, wo, active=True):
-            return self.eval_pdf(ctx, si, wo, active)[1]
+    def _lobe_constants(self, si, active):
+        if self._textured_exponent:
+            return constants(self.m_form, self.m_lobe, self.m_exponent.eval_1(si, active))
+        return self._constants
 
-        def eval_pdf(self, ctx, si, wo, active=True):
-            has_diffuse, has_glossy = self._enabled(ctx)
-            if not (has_diffuse or has_glossy):
-                return Spectrum(0.0), Float(0.0)
-            return self._eval_pdf(ctx, si, wo, active, has_diffuse, has_glossy)
+    def _enabled(self, ctx):
+        """Which lobes this context asks for: (diffuse, glossy), Python bools."""
+        return (self._diffuse is not None and ctx.is_enabled(DIFFUSE, self._diffuse),
+                self._glossy is not None and ctx.is_enabled(GLOSSY, self._glossy))
 
-        def eval_diffuse_reflectance(self, si, active=True):
-            if self._diffuse is None:
-                return Spectrum(0.0)
-            return self.m_diffuse_reflectance.eval(si, active)
+    def parameters_changed(self, keys=()):
+        """Precompute the lobe constants and the lobe choice probability."""
+        n = self.m_exponent
+        if not self._textured_exponent:
+            self._constants = constants(self.m_form, self.m_lobe, n)
+        n_mean = dr.clip(dr.detach(n.mean() if self._textured_exponent else n), 0.0,
+                         EXPONENT_MAX)
+        # Lobe choice by albedo weights, from the textures' means (as Mitsuba's roughplastic and
+        # Mitsuba 0.6's phong): constant per BSDF, so nothing to evaluate per call.
+        w_d = dr.detach(self.m_diffuse_reflectance.mean())
+        w_s = dr.detach(self.m_specular_reflectance.mean()) * lobes.specular_albedo(
+            self.m_form, self.m_lobe, n_mean)
+        self._p_glossy = Float(mixture.probability(w_s, w_d))
+        if V.jit:
+            dr.make_opaque(self._p_glossy, *([] if self._textured_exponent else self._constants))
 
-        def traverse(self, cb):
-            # Only the parameters of lobes that exist: the lobe structure is fixed at load time.
-            if self._diffuse is not None:
-                cb.put("diffuse_reflectance", self.m_diffuse_reflectance,
-                       mi.ParamFlags.Differentiable)
-            if self._glossy is not None:
-                cb.put("specular_reflectance", self.m_specular_reflectance,
-                       mi.ParamFlags.Differentiable)
-                if self._textured_exponent or jit:  # a Python float cannot be updated
-                    cb.put("exponent", self.m_exponent, mi.ParamFlags.Differentiable)
+    def eval_diffuse_reflectance(self, si, active=True):
+        if self._diffuse is None:
+            return Spectrum(0.0)
+        return self.m_diffuse_reflectance.eval(si, active)
 
-        def to_string(self):
-            return (f"Phong[\n  form = {self.m_form},\n  lobe = {self.m_lobe},\n"
-                    f"  diffuse_reflectance = {_common.indent(self.m_diffuse_reflectance)},\n"
-                    f"  specular_reflectance = {_common.indent(self.m_specular_reflectance)},\n"
-                    f"  exponent = {_common.indent(self.m_exponent)}\n]")
+    def traverse(self, cb):
+        # Only the parameters of lobes that exist: the lobe structure is fixed at load time.
+        if self._diffuse is not None:
+            cb.put("diffuse_reflectance", self.m_diffuse_reflectance,
+                   mi.ParamFlags.Differentiable)
+        if self._glossy is not None:
+            cb.put("specular_reflectance", self.m_specular_reflectance,
+                   mi.ParamFlags.Differentiable)
+            if self._textured_exponent or V.jit:  # a Python float cannot be updated
+                cb.put("exponent", self.m_exponent, mi.ParamFlags.Differentiable)
 
-    return Phong
+    def to_string(self):
+        return (f"Phong[\n  form = {self.m_form},\n  lobe = {self.m_lobe},\n"
+                f"  diffuse_reflectance = {_common.indent(self.m_diffuse_reflectance)},\n"
+                f"  specular_reflectance = {_common.indent(self.m_specular_reflectance)},\n"
+                f"  exponent = {_common.indent(self.m_exponent)}\n]")

@@ -25,8 +25,6 @@ reflectance R0 = ((η − 1)² + k²) / ((η + 1)² + k²) of the same η, k (:f
 
 from __future__ import annotations
 
-import math
-
 import drjit as dr
 
 # Floor of denominators that vanish only in degenerate cases (grazing light on η = 1, k = 0):
@@ -34,15 +32,9 @@ import drjit as dr
 _TINY = 1e-30
 
 
-def _unit_interval(x):
-    # dr.minimum/maximum rather than dr.clip: the latter is a Python function, ~0.4 µs a call
-    # on the Python floats of scalar variants (products are written as x * x for the same reason)
-    return dr.minimum(dr.maximum(x, 0.0), 1.0)
-
-
 def exact(cos_theta_i, eta, k):
     """Unpolarised Fresnel reflectance at incidence cosθi ∈ [0, 1], exact, per channel."""
-    c = _unit_interval(cos_theta_i)
+    c = dr.minimum(dr.maximum(cos_theta_i, 0.0), 1.0)
     c2 = c * c
     s2 = 1.0 - c2
     t0 = eta * eta - k * k - s2
@@ -58,42 +50,6 @@ def exact(cos_theta_i, eta, k):
     return 0.5 * (rs + rp)
 
 
-def channel_constants(eta: float, k: float) -> tuple[float, float]:
-    """(η² − k², 4η²k²) of one channel: what :func:`exact_channels` needs of η, k."""
-    return eta * eta - k * k, 4.0 * (eta * k) * (eta * k)
-
-
-def exact_channels(cos_theta_i: float, channels) -> list[float]:
-    """
-    :func:`exact` on Python floats for several channels at once, from their
-    :func:`channel_constants`: the same operations in the same order (equal to the last bit,
-    ``tests/test_microfacet_terms.py``), written for scalar variants, where Mitsuba calls a
-    plugin once per ray and each ``dr.`` function on a float costs ~0.06 µs: the angle terms
-    are computed once, and clamps are conditional expressions (1.2 µs a channel → 0.5 µs).
-    """
-    c = 0.0 if cos_theta_i < 0.0 else (1.0 if cos_theta_i > 1.0 else cos_theta_i)
-    c2 = c * c
-    s2 = 1.0 - c2
-    out = []
-    for e2k2, four_ek2 in channels:
-        t0 = e2k2 - s2
-        ab = math.sqrt(t0 * t0 + four_ek2)
-        a2 = 0.5 * (ab + t0)
-        a = math.sqrt(a2) if a2 > 0.0 else 0.0
-        b2 = 0.5 * (ab - t0)
-        b2 = b2 if b2 > 0.0 else 0.0
-        am, ap = a - c, a + c
-        den = ap * ap + b2
-        rs = (am * am + b2) / (den if den > _TINY else _TINY)
-        ac = a * c
-        pm, pp = ac - s2, ac + s2
-        b2c2 = b2 * c2
-        den = pp * pp + b2c2
-        rp = rs * (pm * pm + b2c2) / (den if den > _TINY else _TINY)
-        out.append(0.5 * (rs + rp))
-    return out
-
-
 def r0(eta, k):
     """Reflectance at normal incidence: ((η − 1)² + k²) / ((η + 1)² + k²)."""
     k2 = dr.square(k)
@@ -103,6 +59,6 @@ def r0(eta, k):
 def schlick(cos_theta_i, eta, k):
     """Schlick's approximation R0 + (1 − R0)(1 − cosθi)⁵, with R0 from η and k."""
     f0 = r0(eta, k)
-    x = 1.0 - _unit_interval(cos_theta_i)
+    x = 1.0 - dr.minimum(dr.maximum(cos_theta_i, 0.0), 1.0)
     x2 = x * x
     return f0 + (1.0 - f0) * (x2 * x2 * x)

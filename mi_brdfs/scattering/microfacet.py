@@ -34,8 +34,6 @@ and an α already clamped to :data:`ALPHA_MIN`.
 
 from __future__ import annotations
 
-import math
-
 import drjit as dr
 import mitsuba as mi
 
@@ -45,8 +43,8 @@ BECKMANN, GGX = "beckmann", "ggx"
 DISTRIBUTIONS = (BECKMANN, GGX)
 
 #: Smallest roughness the terms are evaluated at, as Mitsuba's ``MicrofacetDistribution``
-#: clamps it: below, D = 1/(πα²) at the peak exceeds 3e7 and the lobe is narrower than
-#: float32 directions near the normal resolve (physics-notes §3g).
+#: clamps it: below, D = 1/(πα²) at the peak exceeds 3e7 and the lobe is narrower than the
+#: spacing of float32 directions near the normal (about 6e-8 rad, one ulp of cosθ = 1).
 ALPHA_MIN = 1e-4
 
 #: Mitsuba's D cut-off: D is 0 where D·cosθm ≤ 1e-20, which removes the underflowing tails
@@ -165,15 +163,19 @@ def sample_ndf(kind: str, alpha, u):
     return mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta)
 
 
-def sample_visible(kind: str, alpha, wi, u):
+def distribution(kind: str, alpha):
+    """Mitsuba's ``MicrofacetDistribution`` of ``kind`` and α, with visible-normal sampling."""
+    return mi.MicrofacetDistribution(mitsuba_type(kind), alpha, True)
+
+
+def sample_visible(kind: str, alpha, wi, u, distr=None):
     """
     A microfacet normal from the distribution of visible normals of ``wi``, density
     :func:`pdf_visible` with the exact :func:`smith_g1` (Heitz & d'Eon 2014). This is Mitsuba's
     own exact sampler (Jakob's numerical inversion for Beckmann, Heitz 2018 for GGX), the one
-    ``roughconductor`` uses.
+    ``roughconductor`` uses; ``distr`` is :func:`distribution` (kind, α) when it is at hand.
     """
-    m, _ = mi.MicrofacetDistribution(mitsuba_type(kind), alpha, True).sample(wi, u)
-    return m
+    return (distr or distribution(kind, alpha)).sample(wi, u)[0]
 
 
 def sample_vcavity_visible(kind: str, alpha, wi, u, u_facet):
@@ -224,90 +226,3 @@ def pdf_visible_reflection(d, g1_wi, wi):
 def reflection_jacobian(wo, m):
     """|∂ωm/∂ωo| = 1 / (4 |ωo·m|) of the reflection ωo = reflect(ωi, m) (Walter eq. 14)."""
     return 1.0 / dr.maximum(4.0 * dr.abs(dot(wo, m)), _TINY)
-
-
-# -- scalar variants ---------------------------------------------------------------------------
-
-def _g1_mitsuba_float(kind: str, alpha: float, vx: float, vy: float, vz: float,
-                      vm: float) -> float:
-    """:func:`smith_g1_mitsuba` on Python floats (``vm`` = v·m)."""
-    if vm * vz <= 0.0:
-        return 0.0
-    ax, ay = alpha * vx, alpha * vy
-    xy = ax * ax + ay * ay
-    if xy == 0.0:
-        return 1.0
-    vz2 = vz * vz
-    t2 = xy / (vz2 if vz2 > _TINY else _TINY)
-    if kind == BECKMANN:
-        a = 1.0 / math.sqrt(t2)
-        if a >= 1.6:
-            return 1.0
-        a2 = a * a
-        return (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2)
-    return 2.0 / (1.0 + math.sqrt(1.0 + t2))
-
-
-def reflection_floats(kind: str, smith: bool, visible: bool, alpha: float, wi, wo):
-    r"""
-    The microfacet reflection lobe for one pair of directions on Python floats, for scalar
-    variants: ``(D·G/(4 cosθi), pdf, ωi·m)`` with m the half vector, or None where the pair
-    sees the back of m. ``wi`` and ``wo`` are (x, y, z) sequences of floats. ``smith`` picks
-    Mitsuba's separable G1·G1 (else the V-cavity G), ``visible`` the visible-normal pdf (with the
-    G1 of the same masking) over D·cosθm.
-
-    The same operations as :func:`ndf`, :func:`smith_g1_mitsuba`, :func:`vcavity_g`,
-    :func:`vcavity_g1` and the pdfs above (equal to them to float64 rounding,
-    ``tests/test_microfacet_terms.py``) in one flat function: Mitsuba calls a plugin once per
-    ray in scalar variants, where the per-term function calls and ``dr.`` calls on floats cost
-    more than the arithmetic (10.6 µs against 1.5 µs for this function).
-    """
-    ix, iy, iz = wi
-    ox, oy, oz = wo
-    hx, hy, hz = ix + ox, iy + oy, iz + oz
-    h2 = hx * hx + hy * hy + hz * hz
-    if not h2 > 0.0:  # ωo = −ωi: no half vector (NaN in the JIT terms, masked there)
-        return None
-    inv = 1.0 / math.sqrt(h2)
-    mx, my, mz = hx * inv, hy * inv, hz * inv
-    cos_im = ix * mx + iy * my + iz * mz
-    cos_om = ox * mx + oy * my + oz * mz
-    if not (cos_im > 0.0 and cos_om > 0.0):
-        return None
-    # D
-    cos2 = mz * mz
-    sx, sy = mx / alpha, my / alpha
-    slope2 = sx * sx + sy * sy
-    a2 = alpha * alpha
-    if kind == BECKMANN:
-        den = math.pi * a2 * (cos2 * cos2)
-        d = math.exp(-slope2 / (cos2 if cos2 > _TINY else _TINY)) / \
-            (den if den > _TINY else _TINY)
-    else:
-        q = slope2 + cos2
-        den = math.pi * a2 * (q * q)
-        d = 1.0 / (den if den > _TINY else _TINY)
-    if not d * mz > D_COS_MIN:
-        d = 0.0
-    # G, and G1(ωi) for the visible-normal pdf
-    if smith:
-        g1_wi = _g1_mitsuba_float(kind, alpha, ix, iy, iz, cos_im)
-        g = g1_wi * _g1_mitsuba_float(kind, alpha, ox, oy, oz, cos_om)
-    else:
-        vm = 0.5 * (cos_im + cos_om)
-        if vm > 0.0 and iz > 0.0 and oz > 0.0:
-            g = 2.0 * mz * (iz if iz < oz else oz) / (vm if vm > _TINY else _TINY)
-            g = 1.0 if g > 1.0 else g
-        else:
-            g = 0.0
-        g1_wi = 0.0
-        if visible and cos_im > 0.0 and iz > 0.0 and mz > 0.0:
-            g1_wi = 2.0 * mz * iz / (cos_im if cos_im > _TINY else _TINY)
-            g1_wi = 1.0 if g1_wi > 1.0 else g1_wi
-    four_cos_i = 4.0 * iz
-    if visible:
-        pdf = d * g1_wi / (four_cos_i if four_cos_i > _TINY else _TINY)
-    else:
-        j = 4.0 * abs(cos_om)
-        pdf = d * mz * (1.0 / (j if j > _TINY else _TINY))
-    return d * g / four_cos_i, pdf, cos_im

@@ -1,49 +1,32 @@
 """
-Three-vectors for the terms, cheap in every variant.
+Three-vector helpers for the terms, the same in every variant.
 
-The terms take anything with ``.x``, ``.y``, ``.z``: ``mi.Vector3f`` (JIT variants: the
-components are arrays, and these helpers trace the same operations as ``dr.dot`` and
-``dr.normalize``) or a named tuple of Python floats. Scalar variants, where Mitsuba calls a
-plugin once per ray and an operation on a ``mi.Vector3f`` costs 0.2–3 µs (``dr.normalize``
-2.8 µs, ``dr.dot`` 0.7 µs, against 0.01 µs for a float product), use the flat float versions
-of the terms (``microfacet.reflection_floats``) on (x, y, z) tuples, and :func:`reflect_f32`.
+They take anything with ``.x``, ``.y``, ``.z`` (``mi.Vector3f``: arrays in JIT variants, Python
+floats in scalar ones) and use the fused multiply-adds of ``dr.dot`` and ``dr.normalize``, so that
+the terms round exactly as Mitsuba's C++ BSDFs do (``tests/scattering/test_vector.py`` checks the
+results bit for bit against ``dr.dot``, ``dr.normalize`` and ``mi.reflect``).
 """
 
 from __future__ import annotations
 
-import struct
-
 import drjit as dr
+import mitsuba as mi
 
 
 def dot(a, b):
-    """
-    a·b from the components, with the fused multiply-adds of ``dr.dot``, so that the terms
-    round as Mitsuba's C++ BSDFs do (with separate products and sums, cooktorrance differed from
-    roughconductor by 2e-6 where it is bit-identical with these).
-    """
+    """a·b, rounded as ``dr.dot`` rounds it."""
     return dr.fma(a.z, b.z, dr.fma(a.y, b.y, a.x * b.x))
 
 
-def half_vector(wi, wo, vec3):
-    """(ωi + ωo)/‖ωi + ωo‖ as ``dr.normalize`` computes it, built with ``vec3`` (NaN when
-    ωo = −ωi, to be masked)."""
+def half_vector(wi, wo):
+    """(ωi + ωo)/‖ωi + ωo‖ as ``dr.normalize`` computes it (NaN when ωo = −ωi, to be masked)."""
     hx, hy, hz = wi.x + wo.x, wi.y + wo.y, wi.z + wo.z
-    inv = dr.rsqrt(dr.fma(hz, hz, dr.fma(hy, hy, hx * hx)))
-    return vec3(hx * inv, hy * inv, hz * inv)
+    h2 = dr.fma(hz, hz, dr.fma(hy, hy, hx * hx))
+    inv = dr.rsqrt(h2) if dr.is_jit_v(mi.Float) else (dr.rsqrt(h2) if h2 > 0.0 else dr.nan)
+    return mi.Vector3f(hx * inv, hy * inv, hz * inv)
 
 
-_F32X3 = struct.Struct("3f")
-
-
-def reflect_f32(wi, m) -> tuple:
-    """
-    The mirror image 2(ωi·m)m − ωi of ωi about m, for (x, y, z) sequences of Python floats,
-    rounded to float32 as a scalar variant's ``mi.Vector3f`` stores it: the direction a
-    ``BSDFSample3f`` records, so that a sample's terms can be evaluated at it (rounding by
-    ``struct``: 0.13 µs, where building a ``mi.Vector3f`` and reading it back costs 0.5).
-    """
-    ix, iy, iz = wi
-    mx, my, mz = m
-    k = 2.0 * (ix * mx + iy * my + iz * mz)
-    return _F32X3.unpack(_F32X3.pack(k * mx - ix, k * my - iy, k * mz - iz))
+def reflect(wi, m):
+    """The mirror image 2(ωi·m)m − ωi of ωi about m, as ``mi.reflect`` computes it."""
+    k = 2.0 * dot(wi, m)
+    return mi.Vector3f(dr.fma(k, m.x, -wi.x), dr.fma(k, m.y, -wi.y), dr.fma(k, m.z, -wi.z))

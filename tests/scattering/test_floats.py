@@ -1,0 +1,100 @@
+"""
+The terms compiled for Python floats (mi_brdfs.scattering.floats) return what the terms return:
+same source, rewritten drjit calls, checked function by function on the same floats.
+"""
+
+import mitsuba as mi
+import numpy as np
+import pytest
+from helpers import random_directions
+
+from mi_brdfs.scattering import floats, fresnel, microfacet, vector
+
+REWRITTEN = ("select", "maximum", "minimum", "fma", "square")
+
+
+def _cases(rng):
+    """(function name, argument tuples) for every term, degenerate inputs included."""
+    dirs = [mi.Vector3f(*map(float, d)) for d in random_directions(rng, 60)]
+    dirs += [mi.Vector3f(0, 0, 1), mi.Vector3f(1, 0, 0), mi.Vector3f(0.6, 0, -0.8)]
+    ups = [d for d in dirs if d.z > 0]
+    us = [mi.Point2f(*map(float, u)) for u in rng.random((20, 2))] + [mi.Point2f(0, 0)]
+    kinds_alphas = [(k, a) for k in microfacet.DISTRIBUTIONS for a in (1e-4, 0.2, 1.5)]
+    pairs = list(zip(dirs, dirs[::-1]))
+    yield "dot", pairs
+    yield "half_vector", [(a, b) for a, b in pairs if (a.z + b.z) != 0 or a.x + b.x != 0]
+    yield "reflect", pairs
+    for name in ("ndf", "smith_lambda"):
+        yield name, [(k, a, v) for k, a in kinds_alphas for v in dirs]
+    for name in ("smith_g1", "smith_g1_mitsuba"):
+        yield name, [(k, a, v, m) for k, a in kinds_alphas for v, m in zip(dirs, ups * 2)]
+    yield "vcavity_g1", list(zip(dirs, ups * 2))
+    yield "vcavity_g", [(a, b, m) for (a, b), m in zip(pairs, ups * 3)]
+    yield "sample_ndf", [(k, a, u) for k, a in kinds_alphas for u in us]
+    yield "sample_vcavity_visible", [(k, a, w, u, 0.3) for k, a in kinds_alphas
+                                     for w, u in zip(ups, us)]
+    yield "pdf_ndf", [(0.7, m) for m in ups]
+    yield "pdf_visible", [(0.7, 0.9, w, m) for w, m in zip(ups, ups[::-1])]
+    yield "pdf_visible_reflection", [(0.7, 0.9, w) for w in ups]
+    yield "reflection_jacobian", list(zip(dirs, ups * 2))
+    cos = [0.0, 1e-8, 0.3, 0.999, 1.0, -0.1, 1.1]
+    iors = [(1.5, 0.0), (0.2, 3.9), (1.0 + 1e-6, 0.0), (0.0, 1.0), (1e3, 1e3)]
+    for name in ("exact", "schlick"):
+        yield name, [(c, e, k) for c in cos for e, k in iors]
+    yield "r0", iors
+
+
+def _values(x):
+    if isinstance(x, (int, float)):
+        return [float(x)]
+    return [float(c) for c in x]
+
+
+def test01_compiled_terms_equal_the_terms(variant_scalar_rgb, np_rng):
+    """Every term, compiled for floats, returns the terms' own value on the same floats (to
+    float64 rounding: a*b + c where dr.fma rounds once)."""
+    modules = {m: floats.specialise(m) for m in (vector, microfacet, fresnel)}
+    seen = set()
+    for name, cases in _cases(np_rng):
+        module = next(m for m in modules if hasattr(m, name) and
+                      getattr(m, name).__module__ == m.__name__)
+        original, compiled = getattr(module, name), getattr(modules[module], name)
+        assert compiled is not original
+        assert cases
+        for args in cases:
+            want, got = _values(original(*args)), _values(compiled(*args))
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-300,
+                                       err_msg=f"{name}{args}")
+        seen.add(name)
+    # every function a plugin uses is among them
+    assert {"ndf", "smith_g1_mitsuba", "vcavity_g", "exact", "half_vector", "reflect"} <= seen
+
+
+def test02_no_drjit_call_left(variant_scalar_rgb):
+    """The compiled functions no longer call the rewritten drjit functions, and the terms they
+    call from sibling modules (microfacet -> vector.dot) are the compiled ones."""
+    for module in (vector, microfacet, fresnel):
+        compiled = floats.specialise(module)
+        for name, fn in vars(compiled).items():
+            if callable(fn) and getattr(fn, "__code__", None) and \
+                    fn.__code__.co_filename.startswith("<"):
+                names = set(fn.__code__.co_names)
+                assert not names & set(REWRITTEN), (module.__name__, name, names)
+    compiled = floats.specialise(microfacet)
+    assert compiled.smith_g1.__globals__["dot"] is floats.specialise(vector).dot
+
+
+def test03_a_wrong_rewrite_is_caught(variant_scalar_rgb, np_rng, monkeypatch):
+    """test01 rejects a rewrite that swaps dr.select's branches."""
+    original = floats._Rewrite.visit_Call
+
+    def swapped(self, node):
+        out = original(self, node)
+        if isinstance(out, floats.ast.IfExp) and not isinstance(out.test, floats.ast.Compare):
+            out.body, out.orelse = out.orelse, out.body
+        return out
+
+    monkeypatch.setattr(floats._Rewrite, "visit_Call", swapped)
+    monkeypatch.setattr(floats, "_cache", {})
+    with pytest.raises(AssertionError):
+        test01_compiled_terms_equal_the_terms(None, np_rng)
