@@ -67,6 +67,15 @@ def variant_tools() -> SimpleNamespace:
             return not mask
 
     colour = mi.UnpolarizedSpectrum
+    Vector3f, Point2f = mi.Vector3f, mi.Point2f
+
+    def vector(v):
+        """A direction as ``mi.Vector3f``: the built-ins also take lists and tuples."""
+        return v if type(v) is Vector3f else Vector3f(v)
+
+    def point2(u):
+        """A 2D sample as ``mi.Point2f``: the built-ins also take lists and tuples."""
+        return u if type(u) is Point2f else Point2f(u)
 
     def terms(module):
         """A module of :mod:`mi_brdfs.scattering` as this variant runs it: itself in JIT
@@ -98,6 +107,8 @@ def variant_tools() -> SimpleNamespace:
         per_channel=not jit and not mi.is_spectral,
         scale=scale,
         terms=terms,
+        vector=vector,
+        point2=point2,
         spectrum=spectrum,
         # Mueller matrices in polarized variants; the identity elsewhere.
         depolarize=mi.depolarizer if mi.is_polarized else (lambda value: value),
@@ -139,15 +150,38 @@ def _as_float(value) -> float:
     return float(np.asarray(value, dtype=np.float64).ravel()[0])
 
 
+#: Textures whose every value is the value of one of their nested textures.
+SELECTING_TEXTURES = ("Checkerboard",)
+
+
 def texture_range(tex) -> tuple[float, float] | None:
     """
     The (min, max) a texture can return, where that can be known cheaply, else ``None``.
 
-    Exact for constant textures (``uniform``, ``srgb``) and for ``bitmap`` (its pixel data, after
-    Mitsuba's sRGB linearisation); ``None`` for procedural ones such as ``checkerboard``.
+    Exact for constant textures (``uniform``, ``srgb``), for ``bitmap`` (its pixel data, after
+    Mitsuba's sRGB linearisation) and for textures that only select among nested textures
+    (:data:`SELECTING_TEXTURES`: ``checkerboard``), from their nested textures' ranges; ``None``
+    for others (``mesh_attribute``, textures written in Python), whose values depend on the
+    shape or on code that cannot be inspected at load time.
     """
+    if tex.class_name() in SELECTING_TEXTURES:
+        children = []
+
+        class Collect(mi.TraversalCallback):
+            def put(self, key, obj, *flags):
+                if isinstance(obj, mi.Texture):
+                    children.append(obj)
+
+        tex.traverse(Collect())
+        ranges = [texture_range(child) for child in children]
+        if not ranges or any(r is None for r in ranges):
+            return None
+        return (min(r[0] for r in ranges), max(r[1] for r in ranges))
     if not tex.is_spatially_varying():
-        mean = _as_float(tex.mean())
+        try:
+            mean = _as_float(tex.mean())
+        except RuntimeError:  # no mean either (mesh_attribute: values live on the shape)
+            return None
         try:
             hi = _as_float(tex.max())
         except RuntimeError:  # Texture::max() is not implemented by every texture
@@ -171,6 +205,57 @@ def texture_range(tex) -> tuple[float, float] | None:
     return None
 
 
+_clamped_classes: dict = {}
+
+
+def clamped(tex, lo: float, hi: float):
+    """
+    ``tex`` with every value clamped into [``lo``, ``hi``] when it is evaluated: for textures
+    whose range cannot be known at load time (see :func:`texture_range`), so that no value
+    outside a parameter's range (a negative or energy-creating reflectance) reaches the model.
+    Its parameters are the nested texture's, under the same names (``mi.traverse``).
+    """
+    variant = mi.variant()
+    if variant not in _clamped_classes:
+        _clamped_classes[variant] = _clamped_class()
+    return _clamped_classes[variant](tex, lo, hi)
+
+
+def _clamped_class():
+    """The clamping texture class of the current variant's ``mi.Texture``."""
+
+    class Clamped(mi.Texture):
+        def __init__(self, nested, lo, hi):
+            super().__init__(mi.Properties())
+            self.nested, self.lo, self.hi = nested, lo, hi
+
+        def eval(self, si, active=True):
+            return dr.clip(self.nested.eval(si, active), self.lo, self.hi)
+
+        def eval_1(self, si, active=True):
+            return dr.clip(self.nested.eval_1(si, active), self.lo, self.hi)
+
+        def eval_3(self, si, active=True):
+            return dr.clip(self.nested.eval_3(si, active), self.lo, self.hi)
+
+        def mean(self):
+            return dr.clip(self.nested.mean(), self.lo, self.hi)
+
+        def is_spatially_varying(self):
+            return True  # as far as anyone can tell: never evaluated without a shape
+
+        def traverse(self, cb):
+            self.nested.traverse(cb)
+
+        def parameters_changed(self, keys=()):
+            self.nested.parameters_changed(keys)
+
+        def to_string(self):
+            return f"Clamped[{self.lo:g}, {self.hi:g}] {indent(self.nested)}"
+
+    return Clamped
+
+
 def _range_text(lo: float, hi: float, lo_open: bool) -> str:
     if math.isinf(hi):
         return f"must be finite and {'>' if lo_open else '≥'} {lo:g}"
@@ -189,6 +274,10 @@ def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: 
 
     Values bounded by 1 are read with ``get_texture`` (reflectances, which Mitsuba upsamples as
     such); others with ``get_unbounded_texture`` (η, k, α), which accepts RGB values above 1.
+
+    A texture whose range can be known at load (:func:`texture_range`) is checked then; one
+    whose range cannot (``mesh_attribute``, a texture written in Python) is returned wrapped
+    by :func:`clamped`, so that its values are clamped into range at each evaluation.
 
     Returns → mi.Texture. Raises ParameterError for values out of range or not finite, and for
     properties that are neither numbers nor colours nor textures.
@@ -210,8 +299,9 @@ def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: 
         elif kind in (T.Spectrum, T.Object):
             tex = getter(name, default)
             rng = texture_range(tex)
-            if rng is not None and not (_in_range(rng[0], lo, hi, lo_open)
-                                        and _in_range(rng[1], lo, hi, lo_open)):
+            if rng is None:  # unknowable at load: clamped into range at each evaluation
+                return clamped(tex, lo, hi)
+            if not (_in_range(rng[0], lo, hi, lo_open) and _in_range(rng[1], lo, hi, lo_open)):
                 shown = Description(f"a texture with values in [{rng[0]:g}, {rng[1]:g}]")
                 raise ParameterError(plugin, name, shown, allowed)
             return tex

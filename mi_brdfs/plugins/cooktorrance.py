@@ -242,7 +242,7 @@ class CookTorrance(mi.BSDF):
         self.m_flags = GLOSSY_FLAGS | (DIFFUSE_FLAGS if len(components) > 1 else 0)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
-        bs = V.new_sample()
+        bs, sample2 = V.new_sample(), V.point2(sample2)
         lobes = use_mf, use_diffuse = self._lobes(ctx)
         wi = si.wi
         active = active & (wi.z > 0)  # one-sided: the local frame's z is cosθ
@@ -293,7 +293,7 @@ class CookTorrance(mi.BSDF):
         lobes = self._lobes(ctx)
         if not (lobes[0] or lobes[1]):
             return Spectrum(0.0), Float(0.0)
-        return self._eval_pdf(si, si.wi, wo, active, lobes)
+        return self._eval_pdf(si, si.wi, V.vector(wo), active, lobes)
 
     def _eval_pdf(self, si, wi, wo, active, lobes, p_microfacet=None):
         """(f·cosθo, pdf of :meth:`sample`) at ``wo``: the enabled lobes and their mixture."""

@@ -70,7 +70,7 @@ class Lambert(mi.BSDF):
         if V.none(active) or not ctx.is_enabled(DIFFUSE):
             return bs, Spectrum(0.0)
         # ωo from the cosine-weighted hemisphere, pdf cosθo/π
-        bs.wo = cosine_hemisphere(sample2)
+        bs.wo = cosine_hemisphere(V.point2(sample2))
         bs.pdf = cosine_hemisphere_pdf(bs.wo)
         bs.eta = 1.0
         bs.sampled_type = UInt32(DIFFUSE)
@@ -96,6 +96,7 @@ class Lambert(mi.BSDF):
 
     def _eval_pdf(self, si, wo, active):
         """(f·cosθo, pdf) at ``wo``, for eval, pdf and eval_pdf."""
+        wo = V.vector(wo)
         active = active & (si.wi.z > 0) & (wo.z > 0)  # one-sided, like `diffuse`
         if V.none(active):
             return Spectrum(0.0), Float(0.0)

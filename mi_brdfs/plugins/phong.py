@@ -220,7 +220,7 @@ class Phong(mi.BSDF):
         self.parameters_changed([])
 
     def sample(self, ctx, si, sample1, sample2, active=True):
-        bs = V.new_sample()
+        bs, sample2 = V.new_sample(), V.point2(sample2)
         has_diffuse, has_glossy = self._enabled(ctx)
         active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
         if V.none(active) or not (has_diffuse or has_glossy):
@@ -256,7 +256,7 @@ class Phong(mi.BSDF):
         has_diffuse, has_glossy = self._enabled(ctx)
         if not (has_diffuse or has_glossy):
             return Spectrum(0.0), Float(0.0)
-        return self._eval_pdf(ctx, si, wo, active, has_diffuse, has_glossy)
+        return self._eval_pdf(ctx, si, V.vector(wo), active, has_diffuse, has_glossy)
 
     def _eval_pdf(self, ctx, si, wo, active, has_diffuse, has_glossy, consts=None):
         """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the enabled lobes."""

@@ -1,0 +1,90 @@
+"""
+Textured parameters: values out of a parameter's range are rejected at load where the texture's
+range can be known (constants, bitmaps, checkerboards of them), and clamped into range at each
+evaluation where it cannot (mesh_attribute: the values live on the shape).
+"""
+
+import mitsuba as mi
+import numpy as np
+import pytest
+
+import mi_brdfs
+
+
+def checker(value, other=0.2):
+    return {"type": "checkerboard", "color0": value, "color1": other}
+
+
+OUT_OF_RANGE = [
+    ("lambert", "reflectance", checker(1.5)),
+    ("lambert", "reflectance", checker(-0.5)),
+    ("lambert", "reflectance", checker(checker(1.2))),  # nested
+    ("phong", "specular_reflectance", checker(-0.3)),
+    ("phong", "diffuse_reflectance", checker(2.0)),
+    ("phong", "exponent", checker(-5.0)),
+    ("phong", "exponent", checker(1e35)),
+    ("cooktorrance", "eta", checker(-1.0)),
+    ("cooktorrance", "k", checker(-1.0)),
+    ("cooktorrance", "alpha", checker(-0.1)),
+    ("cooktorrance", "specular_reflectance", checker(1.5)),
+]
+
+
+@pytest.mark.parametrize("plugin,param,tex", OUT_OF_RANGE,
+                         ids=[f"{p}-{q}-{i}" for i, (p, q, _) in enumerate(OUT_OF_RANGE)])
+def test01_procedural_texture_out_of_range_is_rejected(variants_rgb, plugin, param, tex):
+    spec = {"type": plugin, param: tex}
+    if param == "k":
+        spec["eta"] = 1.5
+    with pytest.raises(RuntimeError) as info:
+        mi.load_dict(spec)
+    last = str(info.value).strip().splitlines()[-1]
+    assert f'{plugin}: parameter "{param}"' in last and "a texture with values in" in last, last
+
+
+def test02_procedural_texture_in_range_is_kept(variants_rgb):
+    bsdf = mi.load_dict({"type": "lambert", "reflectance": checker(0.9, 0.1)})
+    assert "Checkerboard" in str(bsdf)
+    assert mi.load_dict({"type": "phong", "exponent": checker(100.0, 5.0)}) is not None
+
+
+def _triangle_si(colour):
+    """A hit on a triangle whose vertices carry ``colour`` as the attribute vertex_color."""
+    mesh = mi.Mesh("triangle", 3, 1, has_vertex_normals=False, has_vertex_texcoords=False)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = [-1, -1, 0, 1, -1, 0, 0, 1, 0]
+    params["faces"] = [0, 1, 2]
+    params.update()
+    mesh.add_attribute("vertex_color", 3, list(colour) * 3)
+    scene = mi.load_dict({"type": "scene", "mesh": mesh})
+    si = scene.ray_intersect(mi.Ray3f([0, 0, 1], [0, 0, -1]))
+    si.wi = [0, 0, 1]
+    return si, scene  # the scene must outlive si, which points at its mesh
+
+
+ATTRIBUTE = {"type": "mesh_attribute", "name": "vertex_color"}
+
+
+def test03_unknowable_texture_is_clamped_at_evaluation(variants_rgb):
+    """A mesh attribute of (1.5, −0.5, 0.7) as lambert's reflectance acts as (1, 0, 0.7): no
+    sample weight above 1, no negative eval."""
+    si, _scene = _triangle_si([1.5, -0.5, 0.7])
+    ctx = mi.BSDFContext()
+    bsdf = mi.load_dict({"type": "lambert", "reflectance": ATTRIBUTE})
+    f = np.ravel(np.array(bsdf.eval(ctx, si, [0, 0, 1])))
+    np.testing.assert_allclose(f, np.array([1.0, 0.0, 0.7]) / np.pi, rtol=1e-6)
+    _, w = bsdf.sample(ctx, si, 0.5, [0.3, 0.4])
+    np.testing.assert_allclose(np.ravel(np.array(w)), [1.0, 0.0, 0.7], rtol=1e-6)
+
+
+def test04_clamped_eta_gives_a_valid_cooktorrance(variants_rgb):
+    """η from a mesh attribute of −1 is clamped to 0 (with k = 1: a mirror's Fresnel), so eval
+    and pdf stay finite, non-negative and consistent."""
+    si, _scene = _triangle_si([-1.0, -1.0, -1.0])
+    bsdf = mi.load_dict({"type": "cooktorrance", "eta": ATTRIBUTE, "k": 1.0, "alpha": 0.3})
+    ctx = mi.BSDFContext()
+    f, pdf = bsdf.eval_pdf(ctx, si, [0.1, 0.0, 0.994987])
+    f, pdf = np.ravel(np.array(f)), float(np.ravel(np.array(pdf))[0])
+    assert np.isfinite(f).all() and f.min() > 0 and pdf > 0
+    assert "Clamped[0, inf]" in str(bsdf)
+    assert mi_brdfs is not None
