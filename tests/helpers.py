@@ -1,8 +1,11 @@
 """Helpers shared by the tests: the library's batch layer, under the names the tests use."""
 
+import math
+
 import numpy as np
 
-from mi_brdfs.checks._batch import evaluate, random_directions as _random_directions
+from mi_brdfs.checks._batch import evaluate
+from mi_brdfs.checks._batch import random_directions as _random_directions
 from mi_brdfs.checks._batch import sample as _sample
 
 
@@ -22,3 +25,15 @@ def sample(bsdf, wi, s1, s2, ctx=None):
     s = _sample(bsdf, np.atleast_2d(wi), s1, s2, ctx)
     return dict(wo=s.wo, pdf=s.pdf, weight=s.weight, type=s.sampled_type,
                 component=s.sampled_component)
+
+
+def closed_form(form, lobe, n):
+    """E(0) of the specular lobe with ks = 1 (Lafortune & Willems 1994; Giesen 2009 for the
+    halfway lobe)."""
+    if form == "normalized":
+        return 1.0
+    if lobe == "mirror":
+        return 2 * math.pi / (n + 2) if form == "lecture" else 2 * math.pi / (n + 1)
+    if form == "lecture":
+        return 8 * math.pi * (n + 2 ** (-n / 2)) / ((n + 2) * (n + 4))
+    return 8 * math.pi * (1 - 2 ** (-(n + 2) / 2)) / (n + 2)

@@ -403,7 +403,8 @@ class CookTorrance(mi.BSDF):
         return dr.maximum(self.m_alpha.eval_1(si, active), mf.ALPHA_MIN)
 
     def eval_diffuse_reflectance(self, si, active=True):
-        # The default, eval(wo = n)·π, would count the glossy lobe (mitsuba3 PR #1896).
+        # The default, eval(wo = n)·π, would count the glossy lobe
+        # (https://github.com/mitsuba-renderer/mitsuba3/pull/1896).
         if self.m_diffuse_reflectance is None:
             return Spectrum(0.0)
         return self.m_diffuse_reflectance.eval(si, active)

@@ -11,7 +11,7 @@ the ring that reflects above the horizon is an arc |φ| < φ0 and the integrand 
 cos φ, so the φ-integral is exact; the u-integral is Gauss-Legendre on the pieces between the
 angles where rings start and stop crossing the horizon (where it has a square-root kink). Checked
 against brute-force quadrature of :meth:`Phong.brdf` and the closed forms at normal incidence in
-``tests/test_phong_reference.py``.
+``tests/reference/test_phong_reference.py``.
 """
 
 from __future__ import annotations

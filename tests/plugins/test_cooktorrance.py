@@ -218,9 +218,10 @@ def test08_smooth_limit_is_the_fresnel_reflectance(variant_llvm_ad_rgb, visible)
 
 def _chi2_grid():
     """
-    The issue's grid, without duplicates: the sampler and pdf depend on ``shadowing`` only
-    through the visible normals (Smith's or the V-cavity's); test10 shows the D·cos sampler
-    identical for both.
+    The χ² grid (distribution × shadowing × visible × α × θi) without duplicates: the sampler
+    and pdf depend on ``shadowing`` only through the visible normals (Smith's or the
+    V-cavity's); test10_shadowing_changes_sampling_only_through_the_visible_g1 shows the D·cos
+    sampler identical for both.
     """
     cases = []
     for distribution in ("beckmann", "ggx"):
@@ -266,7 +267,7 @@ def test10_shadowing_changes_sampling_only_through_the_visible_g1(variant_llvm_a
         np.testing.assert_array_equal(a["pdf"], b["pdf"])
 
 
-def test10b_vcavity_weights_at_most_f(variant_llvm_ad_rgb, np_rng):
+def test11_vcavity_weights_at_most_f(variant_llvm_ad_rgb, np_rng):
     """
     The V-cavity visible normals make the sample weight F·G/G1_V(ωi) ≤ F (= 1 here), and exactly
     1 where neither direction is masked; Smith's visible normals under the V-cavity G (what the
@@ -290,7 +291,7 @@ def test10b_vcavity_weights_at_most_f(variant_llvm_ad_rgb, np_rng):
 
 @pytest.mark.parametrize("wi", [[0, 0, 1], [0.5, 0.2, 0.84], [0.995, 0, 0.1]],
                          ids=["normal", "oblique", "cos0.1"])
-def test11_chi2_with_diffuse_base(variant_llvm_ad_rgb, wi):
+def test12_chi2_with_diffuse_base(variant_llvm_ad_rgb, wi):
     """The mixture of the two lobes, lobe chosen by mean(ks·F(cosθi)) against mean(ρd)."""
     spec = {"type": CT, "alpha": 0.2, "eta": 1.5, "diffuse_reflectance": 0.5}
     result = checks.chi2_bsdf(spec, wi=wi, res=None, ires=None, sample_count=200_000,
@@ -311,7 +312,7 @@ CONSISTENCY = {
 
 
 @pytest.mark.parametrize("name", CONSISTENCY)
-def test12_weight_is_eval_over_pdf(variants_rgb, name):
+def test13_weight_is_eval_over_pdf(variants_rgb, name):
     """weight == eval/pdf and bs.pdf == pdf(bs.wo) (the mixture pdf), one lobe or both."""
     spec = dict(CONSISTENCY[name], type=CT)
     result = checks.check_consistency(spec, n=small(50_000))
@@ -336,12 +337,13 @@ FURNACE = [(d, s, v, a) for d in ("beckmann", "ggx") for s in ("vcavity", "smith
 
 @pytest.mark.parametrize("distribution,shadowing,visible,alpha", FURNACE,
                          ids=[f"{d}-{s}-{'vis' if v else 'all'}-a{a}" for d, s, v, a in FURNACE])
-def test13_white_furnace(variant_llvm_ad_rgb, distribution, shadowing, visible, alpha):
+def test14_white_furnace(variant_llvm_ad_rgb, distribution, shadowing, visible, alpha):
     """
     F ≡ 1: the directional albedo from sample() is ≤ 1 and equals the float64 quadrature of
     the same formula to 1e-3 (plus 4 standard errors of the Monte Carlo estimate). Beckmann
-    with ``smith`` and visible normals inherits roughconductor's sampling bias (test14), so
-    there sample() is held to the reference within that bias, 3e-3.
+    with ``smith`` and visible normals inherits roughconductor's sampling bias
+    (test15_smith_beckmann_samples_like_roughconductor), so there sample() is held to the
+    reference within that bias, 3e-3.
     """
     spec = {"type": CT, "distribution": distribution, "shadowing": shadowing,
             "sample_visible": visible, "alpha": alpha, "fresnel": "none"}
@@ -353,7 +355,7 @@ def test13_white_furnace(variant_llvm_ad_rgb, distribution, shadowing, visible, 
     assert result.passed, result.message
 
 
-def test14_smith_beckmann_samples_like_roughconductor(variant_llvm_ad_rgb):
+def test15_smith_beckmann_samples_like_roughconductor(variant_llvm_ad_rgb):
     """
     roughconductor samples the exact Beckmann visible normals but divides by a pdf with
     Mitsuba's rational G1, so its sample() albedo departs from its eval() albedo by up to
@@ -370,7 +372,7 @@ def test14_smith_beckmann_samples_like_roughconductor(variant_llvm_ad_rgb):
     assert 1.5e-3 < expected[0] - a[0][0] < 3e-3 and a[1][0] < 2e-4
 
 
-def test15_reference_albedo_at_most_one(np_rng):
+def test16_reference_albedo_at_most_one(np_rng):
     """The float64 model conserves energy (F ≡ 1) over α ∈ [1e-3, 10] and θ ∈ [0, 89.9°]."""
     worst = 0.0
     for distribution in ("beckmann", "ggx"):
@@ -384,7 +386,7 @@ def test15_reference_albedo_at_most_one(np_rng):
     assert ref.CookTorrance(0.5, fresnel="none").albedo(0.0)[0] == pytest.approx(0.8924, abs=1e-4)
 
 
-def test16_furnace_render(variant_llvm_ad_rgb):
+def test17_furnace_render(variant_llvm_ad_rgb):
     """The furnace image is finite and its mean is what the reference albedo predicts."""
     result = checks.check_furnace({"type": CT, "alpha": 0.3, "fresnel": "none"}, spp=64, res=32)
     assert result.passed, result.message
@@ -392,7 +394,7 @@ def test16_furnace_render(variant_llvm_ad_rgb):
 
 # -- stability and bad input --------------------------------------------------------------------
 
-def test17_stability(variants_rgb):
+def test18_stability(variants_rgb):
     """
     No NaN/Inf/negative from eval, pdf, eval_pdf, sample() at the stress directions (grazing
     down to cosθ = 6e-17, V = −L, mirror, back side) over α ∈ {0, 1e-4, 10}, η → 1, η, k up to
@@ -440,13 +442,13 @@ def test17_stability(variants_rgb):
 ], ids=["alpha<0", "alpha-nan", "eta<0", "eta0", "eta0-k0", "eta0-channel", "k<0", "k-alone",
         "distribution", "shadowing", "fresnel", "material", "material+eta", "alpha_u",
         "sample_visible", "specular>1"])
-def test18_bad_input(variant_scalar_rgb, params, match):
+def test19_bad_input(variant_scalar_rgb, params, match):
     """One line naming the plugin, the parameter, the value and what is allowed."""
     with pytest.raises(RuntimeError, match=match):
         mi.load_dict(dict(params, type=CT))
 
 
-def test19_named_conductors_are_roughconductors(variants_all):
+def test20_named_conductors_are_roughconductors(variants_all):
     """material = Au gives the η, k textures roughconductor resolves in this variant."""
     ours = mi.traverse(mi.load_dict({"type": CT, "material": "Au"}))
     theirs = mi.traverse(mi.load_dict({"type": "roughconductor", "material": "Au"}))
@@ -458,7 +460,7 @@ def test19_named_conductors_are_roughconductors(variants_all):
     assert {"Au", "Ag", "Al", "Cu", "Cr"} <= set(conductor_names())
 
 
-def test19b_conductor_ior_is_the_materials(variants_rgb, np_rng):
+def test21_conductor_ior_is_the_materials(variants_rgb, np_rng):
     """conductor_ior (the benchmark's and the campaign's η, k) given as eta, k renders the
     lobe of material = Au; aluminium's values would not."""
     from mi_brdfs.plugins.cooktorrance import conductor_ior
@@ -476,7 +478,7 @@ def test19b_conductor_ior_is_the_materials(variants_rgb, np_rng):
 # -- rendering and differentiation ------------------------------------------------------------
 
 @pytest.mark.parametrize("distribution", ["beckmann", "ggx"])
-def test20_render_equals_roughconductor(variant_llvm_ad_rgb, distribution):
+def test22_render_equals_roughconductor(variant_llvm_ad_rgb, distribution):
     """
     The metal Cornell box renders as with roughconductor, same seed, far within the built-in's
     own noise (the difference of two of its renders with other seeds): measured 1e-7 of it,
@@ -495,7 +497,7 @@ def test20_render_equals_roughconductor(variant_llvm_ad_rgb, distribution):
 
 
 @pytest.mark.parametrize("variant", ["llvm_ad_spectral", "llvm_ad_mono", "scalar_spectral"])
-def test21_render_other_variants(variant):
+def test23_render_other_variants(variant):
     """The textbook model renders finite images in the spectral and mono variants."""
     from conftest import set_variant
     set_variant(variant)
@@ -514,7 +516,7 @@ def _sphere(bsdf):
                    "film": {"type": "hdrfilm", "width": 16, "height": 16}}})
 
 
-def test22_traverse_update_and_gradient(variant_llvm_ad_rgb):
+def test24_traverse_update_and_gradient(variant_llvm_ad_rgb):
     """
     alpha, eta, k and the reflectances are exposed; an update of alpha takes effect; the
     gradient of the image with respect to alpha flows and equals roughconductor's (smith).
@@ -539,7 +541,7 @@ def test22_traverse_update_and_gradient(variant_llvm_ad_rgb):
     np.testing.assert_allclose(result[CT], result["roughconductor"], rtol=1e-4)
 
 
-def test23_reciprocity_and_positivity(variants_rgb):
+def test25_reciprocity_and_positivity(variants_rgb):
     for spec in ({"type": CT}, {"type": CT, "distribution": "ggx", "shadowing": "smith",
                                 "diffuse_reflectance": 0.3, "fresnel": "schlick"}):
         for check in (checks.check_reciprocity, checks.check_positivity):
@@ -547,7 +549,7 @@ def test23_reciprocity_and_positivity(variants_rgb):
             assert result.passed, result.message
 
 
-def test24_scalar_constants_follow_updates_and_textures(variant_scalar_rgb, np_rng):
+def test26_scalar_constants_follow_updates_and_textures(variant_scalar_rgb, np_rng):
     """
     Scalar RGB reads constant α, ks, η and k once as floats (``parameters_changed``): after an
     update of α, η and k through mi.traverse the plugin (smith) still equals roughconductor
@@ -577,7 +579,7 @@ def test24_scalar_constants_follow_updates_and_textures(variant_scalar_rgb, np_r
 
 
 @pytest.mark.parametrize("name", ["rgb-conductor-diffuse", "textbook"])
-def test25_mixture_pdf_against_the_reference(variants_rgb, np_rng, name):
+def test27_mixture_pdf_against_the_reference(variants_rgb, np_rng, name):
     """
     With the diffuse base, pdf = p·pdf_microfacet + (1 − p)·cosθo/π with p = mean(ks·F(cosθi))
     / (mean(ks·F(cosθi)) + mean(ρd)), F from the float64 reference; pdf_microfacet from the

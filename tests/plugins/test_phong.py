@@ -1,5 +1,5 @@
 """
-The phong plugin (issue #3): structure, closed forms against the float64 reference, transport
+The phong plugin: structure, closed forms against the float64 reference, transport
 modes, sampling (χ² for each form × lobe × exponent, and for each lobe alone), albedo, reciprocity,
 the white furnace, stability at the extremes, float32 accuracy, rendering, textures, AD and bad
 input. Statistical checks run in llvm_ad_rgb; value checks in scalar_rgb too.
@@ -12,9 +12,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-
-from helpers import eval_pdf, random_directions, sample
-from test_phong_reference import closed_form  # E(0) of the specular lobe, from the issue
+from helpers import closed_form, eval_pdf, random_directions, sample
 
 import mi_brdfs
 from mi_brdfs import checks

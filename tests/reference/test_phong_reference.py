@@ -8,22 +8,12 @@ import math
 
 import numpy as np
 import pytest
+from helpers import closed_form
 
 from mi_brdfs.reference import Phong, for_spec, hemisphere_albedo
 
 FORMS = ("normalized", "lecture", "original")
 LOBES = ("mirror", "halfway")
-
-
-def closed_form(form, lobe, n):
-    """E(0) of the specular lobe with ks = 1 (issue #3; Giesen 2009 for the halfway lobe)."""
-    if form == "normalized":
-        return 1.0
-    if lobe == "mirror":
-        return 2 * math.pi / (n + 2) if form == "lecture" else 2 * math.pi / (n + 1)
-    if form == "lecture":
-        return 8 * math.pi * (n + 2 ** (-n / 2)) / ((n + 2) * (n + 4))
-    return 8 * math.pi * (1 - 2 ** (-(n + 2) / 2)) / (n + 2)
 
 
 @pytest.mark.parametrize("lobe", LOBES)
