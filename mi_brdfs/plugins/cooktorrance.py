@@ -231,8 +231,9 @@ class CookTorrance(mi.BSDF):
         self.m_diffuse_reflectance = None if _common.is_zero(diffuse) else diffuse
         #: Sample visible normals (else D·cosθ).
         self.m_sample_visible = _common.boolean(props, PLUGIN, "sample_visible", True)
+        #: F on spectra, and on the per-channel floats of _channels (None for 'none')
         self._fresnel_term = FRESNEL_TERMS.get(self.m_fresnel)
-        self._fresnel_term = FRESNEL_TERMS.get(self.m_fresnel)
+        self._fresnel_floats = FRESNEL_FLOATS.get(self.m_fresnel)
         self.parameters_changed()
         # Lobe 0 is the microfacet lobe (as roughconductor's only one), lobe 1 the diffuse.
         components = [GLOSSY_FLAGS]
@@ -333,8 +334,8 @@ class CookTorrance(mi.BSDF):
         # D, the masking-shadowing G, and G1(ωi) of the visible normals
         D = mf.ndf(kind, alpha, m)
         if self.m_shadowing == "smith":
-            g1_wi = mf.smith_g1_mitsuba(kind, alpha, wi, m)
-            g1_wo = mf.smith_g1_mitsuba(kind, alpha, wo, m)
+            g1_wi = mf.smith_g1_mitsuba(kind, alpha, wi, m, cos_im)
+            g1_wo = mf.smith_g1_mitsuba(kind, alpha, wo, m, cos_om)
             G = g1_wi * g1_wo
         else:
             G = mf.vcavity_g(wi, wo, m)
@@ -362,12 +363,10 @@ class CookTorrance(mi.BSDF):
         """ks·F(cosθ)·factor per channel, F at the cosine between ωi and the facet normal."""
         term = self._fresnel_term
         if self._channels is not None:  # constants as floats: the same terms, per channel
-            ks, eta, k = self._channels
+            term = self._fresnel_floats
             if term is None:
-                return V.scale(ks, factor)
-            term = FRESNEL_FLOATS[self.m_fresnel]
-            return V.spectrum([c * term(cos_theta, e, kk) * factor
-                               for c, e, kk in zip(ks, eta, k)])
+                return V.spectrum([c * factor for c, _, _ in self._channels])
+            return V.spectrum([c * term(cos_theta, e, k) * factor for c, e, k in self._channels])
         value = self.m_specular_reflectance.eval(si, active) * factor
         if term is not None:
             value = value * term(cos_theta, self.m_eta.eval(si, active),
@@ -434,8 +433,8 @@ class CookTorrance(mi.BSDF):
                         for t in (self.m_specular_reflectance,
                                   self.m_eta if fresnel_on else None,
                                   self.m_k if fresnel_on else None)]
-            if all(c is not None for c in channels):
-                self._channels = tuple(channels)
+            if all(c is not None for c in channels):  # (ks, η, k) of each channel
+                self._channels = list(zip(*channels))
 
     def to_string(self):
         if self.m_material is not None:

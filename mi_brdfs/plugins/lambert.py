@@ -70,14 +70,14 @@ class Lambert(mi.BSDF):
         if V.none(active) or not ctx.is_enabled(DIFFUSE):
             return bs, Spectrum(0.0)
         # ωo from the cosine-weighted hemisphere, pdf cosθo/π
-        bs.wo = cosine_hemisphere(V.point2(sample2))
-        bs.pdf = cosine_hemisphere_pdf(bs.wo)
+        bs.wo = wo = cosine_hemisphere(V.point2(sample2))
+        bs.pdf = pdf = cosine_hemisphere_pdf(wo)
         bs.eta = 1.0
         bs.sampled_type = UInt32(DIFFUSE)
         bs.sampled_component = UInt32(0)
         # weight = f·cosθo / pdf = (ρ/π·cosθo) / (cosθo/π) = ρ
         weight = V.spectrum(self._rho(si, active))
-        return bs, V.select(active & (bs.pdf > 0), V.depolarize(weight), 0.0)
+        return bs, V.select(active & (pdf > 0), V.depolarize(weight), 0.0)
 
     def eval(self, ctx, si, wo, active=True):
         if not ctx.is_enabled(DIFFUSE):

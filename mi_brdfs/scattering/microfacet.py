@@ -83,9 +83,10 @@ def _tan2_alpha2(alpha, v):
     return xy, xy / dr.maximum(dr.square(v.z), _TINY)
 
 
-def _facing(g1, v, m):
-    """χ⁺: a microfacet is seen only from its front, and only from the side of the surface."""
-    return dr.select(dot(v, m) * v.z > 0, g1, 0.0)
+def _facing(g1, v, m, vm=None):
+    """χ⁺: a microfacet is seen only from its front (v·m, computed if not given), and only
+    from the side of the surface."""
+    return dr.select((dot(v, m) if vm is None else vm) * v.z > 0, g1, 0.0)
 
 
 def smith_lambda(kind: str, alpha, v):
@@ -104,11 +105,11 @@ def smith_g1(kind: str, alpha, v, m):
     return _facing(1.0 / (1.0 + smith_lambda(kind, alpha, v)), v, m)
 
 
-def smith_g1_mitsuba(kind: str, alpha, v, m):
+def smith_g1_mitsuba(kind: str, alpha, v, m, vm=None):
     """
     G1(v, m) as Mitsuba 3 computes it: for Beckmann Walter's rational approximation
     (3.535a + 2.181a²)/(1 + 2.276a + 2.577a²), 1 for a ≥ 1.6 (< 0.35 % error); for GGX the
-    exact form, as :func:`smith_g1`.
+    exact form, as :func:`smith_g1`. ``vm``: v·m where the caller has it.
     """
     xy, t2 = _tan2_alpha2(alpha, v)
     if kind == BECKMANN:
@@ -118,7 +119,7 @@ def smith_g1_mitsuba(kind: str, alpha, v, m):
                        (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2))
     else:
         g1 = 2.0 / (1.0 + dr.sqrt(1.0 + t2))
-    return _facing(dr.select(xy == 0, 1.0, g1), v, m)
+    return _facing(dr.select(xy == 0, 1.0, g1), v, m, vm)
 
 
 def vcavity_g1(v, m):

@@ -21,8 +21,7 @@ def dot(a, b):
 def half_vector(wi, wo):
     """(ωi + ωo)/‖ωi + ωo‖ as ``dr.normalize`` computes it (NaN when ωo = −ωi, to be masked)."""
     hx, hy, hz = wi.x + wo.x, wi.y + wo.y, wi.z + wo.z
-    h2 = dr.fma(hz, hz, dr.fma(hy, hy, hx * hx))
-    inv = dr.rsqrt(h2) if dr.is_jit_v(mi.Float) else (dr.rsqrt(h2) if h2 > 0.0 else dr.nan)
+    inv = dr.rsqrt(dr.fma(hz, hz, dr.fma(hy, hy, hx * hx)))  # +inf for h = 0: then 0·inf = NaN
     return mi.Vector3f(hx * inv, hy * inv, hz * inv)
 
 
