@@ -1,55 +1,82 @@
 """
-One way to name a BSDF everywhere: a ``mi.load_dict`` dict, an XML fragment (``<bsdf ...>``),
-a command-line string ``'roughconductor alpha=0.3 material=Au'``, or an already loaded
-``mi.BSDF``. :func:`load_bsdf` turns any of them into a ``mi.BSDF`` in the current variant,
-with one-line errors.
+One way to name a BSDF everywhere, and the one place that turns a name into what a layer needs.
+
+A BSDF is given as a ``mi.load_dict`` dict, an XML fragment (``<bsdf ...>``), a command-line
+string ``'roughconductor alpha=0.3 material=Au'``, or an already loaded ``mi.BSDF``. Every public
+function of the package that takes a BSDF takes all four, through this module:
+
+* :func:`parse`: the spec in canonical form (a command-line string becomes a dict or an XML
+  fragment, once), with one-line errors for what is no BSDF spec at all;
+* :func:`load_bsdf`: a ``mi.BSDF`` in the current variant;
+* :func:`to_xml`: an XML ``<bsdf>`` element to put into a scene file, for every form (a loaded
+  ``mi.BSDF`` through a plugin registered to return that very object);
+* :func:`describe`: a short name for tables and legends.
 """
 
 from __future__ import annotations
 
+import itertools
 import os
 import re
 import shlex
 from xml.sax.saxutils import quoteattr
 
-from .errors import MiBrdfsError
+from .errors import MiBrdfsError, mitsuba_error_line
+
+
+def parse(spec):
+    """
+    The BSDF spec in canonical form: a dict (with a ``type``), an XML fragment (str starting
+    with ``<``) or a ``mi.BSDF``; a command-line string is parsed into a dict or a fragment.
+
+    Raises MiBrdfsError with one line for anything else.
+    """
+    import mitsuba as mi
+
+    if isinstance(spec, mi.BSDF):
+        return spec
+    if isinstance(spec, dict):
+        if not isinstance(spec.get("type"), str):
+            raise MiBrdfsError(f"a BSDF dict needs a 'type' (e.g. 'diffuse'), got {spec}")
+        return spec
+    if isinstance(spec, str) and spec.lstrip().startswith("<"):
+        return spec.strip()
+    if isinstance(spec, str):
+        try:
+            tokens = shlex.split(spec)
+        except ValueError as e:
+            raise MiBrdfsError(f"cannot read BSDF '{spec}': {e}") from None
+        specs = parse_cli(tokens)
+        if len(specs) != 1:
+            raise MiBrdfsError(f"'{spec}' names {len(specs)} BSDFs, not one")
+        return specs[0]
+    raise MiBrdfsError(f"cannot make a BSDF from {spec!r} ({type(spec).__name__}): give a dict, "
+                       f"an XML fragment, 'type key=value ...' or a loaded mi.BSDF")
 
 
 def load_bsdf(spec):
     """
-    A ``mi.BSDF`` from a dict, an XML fragment, a ``'type key=value ...'`` string or a
-    ``mi.BSDF`` (returned as is).
+    A ``mi.BSDF`` in the current variant from any form of spec (a ``mi.BSDF`` is returned as is).
 
     Raises MiBrdfsError with one line when Mitsuba or the plugin rejects the specification.
     """
     import mitsuba as mi
 
-    from .scenes import mitsuba_error_line
-
+    spec = parse(spec)
     if isinstance(spec, mi.BSDF):
         return spec
     try:
         if isinstance(spec, dict):
-            if "type" not in spec:
-                raise MiBrdfsError(f"a BSDF dict needs a 'type' (e.g. 'diffuse'), got {spec}")
             obj = mi.load_dict(spec)
-        elif isinstance(spec, str) and spec.lstrip().startswith("<"):
-            xml = spec.strip()
+        else:
+            xml = spec
             if "version=" not in xml.split(">", 1)[0]:
                 xml = xml.replace("<bsdf", '<bsdf version="3.0.0"', 1)
             obj = mi.load_string(xml)
-        elif isinstance(spec, str):
-            specs = parse_cli(shlex.split(spec))
-            if len(specs) != 1:
-                raise MiBrdfsError(f"'{spec}' names {len(specs)} BSDFs, not one")
-            return load_bsdf(specs[0])
-        else:
-            raise MiBrdfsError(f"cannot make a BSDF from {spec!r}: give a dict, an XML fragment "
-                               f"or 'type key=value ...'")
     except RuntimeError as e:
         raise MiBrdfsError(mitsuba_error_line(e)) from None
     if not isinstance(obj, mi.BSDF):
-        raise MiBrdfsError(f"{spec!r} is a {type(obj).__name__}, not a BSDF")
+        raise MiBrdfsError(f"{describe(spec)} is a {type(obj).__name__}, not a BSDF")
     return obj
 
 
@@ -154,20 +181,36 @@ def _xml_object(spec: dict, indent: str = "", name: str | None = None) -> str:
 
 def to_xml(spec, id: str | None = None) -> str:
     """
-    An XML ``<bsdf>`` element for a BSDF given as a dict or an XML fragment, with ``id`` set.
+    An XML ``<bsdf>`` element, with ``id`` set, for a BSDF in any form (see :func:`parse`).
     Dict values: bool, int, float, str, ``{'type': 'rgb'|'spectrum', 'value': ...}`` and nested
-    plugin dicts (textures, BSDFs).
+    plugin dicts (textures, BSDFs). A loaded ``mi.BSDF`` becomes a ``<bsdf>`` of a plugin type
+    registered (in the current variant) to return that very object.
     """
+    import mitsuba as mi
+
+    spec = parse(spec)
+    if isinstance(spec, mi.BSDF):
+        attrs = f" id={quoteattr(id)}" if id else ""
+        return f"<bsdf type={quoteattr(_object_plugin(spec))}{attrs}/>"
     if isinstance(spec, dict):
-        spec = dict(spec, id=id) if id else spec
-        return _xml_object(spec)
-    if isinstance(spec, str) and spec.lstrip().startswith("<"):
-        xml = spec.strip()
-        if id:
-            xml = re.sub(r"\sid=(\"[^\"]*\"|'[^']*')", "", xml, count=1)
-            xml = xml.replace("<bsdf", f"<bsdf id={quoteattr(id)}", 1)
-        return xml
-    raise MiBrdfsError(f"cannot put {spec!r} into an XML scene: give a dict or an XML fragment")
+        return _xml_object(dict(spec, id=id) if id else spec)
+    xml = spec
+    if id:
+        xml = re.sub(r"\sid=(\"[^\"]*\"|'[^']*')", "", xml, count=1)
+        xml = xml.replace("<bsdf", f"<bsdf id={quoteattr(id)}", 1)
+    return xml
+
+
+_object_names = (f"mi_brdfs_loaded_bsdf_{i}" for i in itertools.count())
+
+
+def _object_plugin(bsdf) -> str:
+    """The name of a BSDF plugin, registered now, whose every instance is ``bsdf`` itself."""
+    import mitsuba as mi
+
+    name = next(_object_names)
+    mi.register_bsdf(name, lambda props, bsdf=bsdf: bsdf)
+    return name
 
 
 # -------------------------------------------------------------------------------------------------

@@ -1,5 +1,8 @@
 """Exceptions for user errors: each carries one line that names the problem and the fix."""
 
+import os
+import re
+
 
 class MiBrdfsError(Exception):
     """A user error (bad input, missing file, unusable environment): one line, no traceback."""
@@ -29,3 +32,29 @@ def _show(value) -> str:
     if isinstance(value, float):
         return f"{value:g}"
     return str(value).replace("\n", " ")
+
+
+def mitsuba_error_line(error: BaseException) -> str:
+    """
+    One line from a Mitsuba loader error: the location Mitsuba gives and the last line of the
+    cause (a Python plugin's exception arrives inside Mitsuba's message with its traceback).
+    """
+    text = str(error).strip()
+    text = re.sub(r"^\[[\w.]+:\d+\]\s*", "", text)  # Mitsuba's [parser.cpp:1718] source tag
+    head, sep, tail = text.partition("Traceback (most recent call last):")
+    if sep:
+        lines = [ln.strip() for ln in tail.strip().splitlines() if ln.strip()]
+        cause = lines[-1] if lines else ""
+        cause = re.sub(r"^(mi_brdfs\.errors\.)?(\w+Error): ", "", cause)
+        head = head.strip().rstrip(":")
+        head = re.sub(r'failed to instantiate (\w+) plugin of type "[\w-]+"', "", head).strip(" :")
+        text = f"{head}: {cause}" if head else cause
+    # 'At /long/path/scene.xml (line 29, col 6): ...' -> 'scene.xml (line 29, col 6): ...'
+    text = re.sub(r'At "?([^"\s]+?)"? (\(line \d+, col \d+\))',
+                  lambda m: f"{os.path.basename(m.group(1))} {m.group(2)}", text)
+    unused = re.findall(r"\$(\w+)=", text) if "unused parameters" in text else []
+    if unused:
+        return ("the scene declares no <default> for " + ", ".join(unused) +
+                " (a -D name=value must name a <default name=...> of the scene)")
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    return " ".join(lines)

@@ -11,7 +11,7 @@ import os
 import re
 from pathlib import Path
 
-from .errors import MiBrdfsError
+from .errors import MiBrdfsError, mitsuba_error_line
 
 _PACKAGE = Path(__file__).resolve().parent
 
@@ -52,32 +52,6 @@ def parse_defines(items: list[str] | None) -> dict[str, str]:
     return defines
 
 
-def mitsuba_error_line(error: BaseException) -> str:
-    """
-    One line from a Mitsuba loader error: the location Mitsuba gives and the last line of the
-    cause (a Python plugin's exception arrives inside Mitsuba's message with its traceback).
-    """
-    text = str(error).strip()
-    text = re.sub(r"^\[[\w.]+:\d+\]\s*", "", text)  # Mitsuba's [parser.cpp:1718] source tag
-    head, sep, tail = text.partition("Traceback (most recent call last):")
-    if sep:
-        lines = [ln.strip() for ln in tail.strip().splitlines() if ln.strip()]
-        cause = lines[-1] if lines else ""
-        cause = re.sub(r"^(mi_brdfs\.errors\.)?(\w+Error): ", "", cause)
-        head = head.strip().rstrip(":")
-        head = re.sub(r'failed to instantiate (\w+) plugin of type "[\w-]+"', "", head).strip(" :")
-        text = f"{head}: {cause}" if head else cause
-    # 'At /long/path/scene.xml (line 29, col 6): ...' -> 'scene.xml (line 29, col 6): ...'
-    text = re.sub(r'At "?([^"\s]+?)"? (\(line \d+, col \d+\))',
-                  lambda m: f"{os.path.basename(m.group(1))} {m.group(2)}", text)
-    unused = re.findall(r"\$(\w+)=", text) if "unused parameters" in text else []
-    if unused:
-        return ("the scene declares no <default> for " + ", ".join(unused) +
-                " (a -D name=value must name a <default name=...> of the scene)")
-    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
-    return " ".join(lines)
-
-
 def load_scene(path: str | os.PathLike, defines: dict | None = None, bsdfs: dict | None = None,
                **kwargs):
     """
@@ -85,7 +59,8 @@ def load_scene(path: str | os.PathLike, defines: dict | None = None, bsdfs: dict
     with one line for a missing file, a parse error or a plugin that rejects its parameters.
 
     Parameter ``bsdfs`` (dict | None): ``{id: BSDF}`` replaces the ``<bsdf id="...">`` elements
-    of the scene by these BSDFs (dicts, XML fragments or ``'type key=value'`` strings), e.g.
+    of the scene by these BSDFs (in any form of :mod:`mi_brdfs.bsdfspec`: dicts, XML fragments,
+    ``'type key=value'`` strings or loaded ``mi.BSDF`` objects), e.g.
     ``load_scene('furnace', bsdfs={'material': {'type': 'roughconductor', 'alpha': 0.3}})``.
     """
     import mitsuba as mi
@@ -114,24 +89,18 @@ def swap_bsdfs(xml: str, bsdfs: dict) -> str:
     """The scene XML text with each ``<bsdf id=...>`` of ``bsdfs`` replaced (see load_scene)."""
     import xml.etree.ElementTree as ET
 
-    from .bsdfspec import parse_cli, to_xml
+    from .bsdfspec import to_xml
 
     try:
         root = ET.fromstring(xml)
     except ET.ParseError as e:
         raise MiBrdfsError(f"cannot parse the scene to swap its materials: {e}") from None
     for bsdf_id, spec in bsdfs.items():
-        if isinstance(spec, str) and not spec.lstrip().startswith("<"):
-            import shlex
-            specs = parse_cli(shlex.split(spec))
-            if len(specs) != 1:
-                raise MiBrdfsError(f"'{spec}' names {len(specs)} BSDFs, not one")
-            spec = specs[0]
+        new = ET.fromstring(to_xml(spec, id=bsdf_id))
         found = False
         for parent in root.iter():
             for i, child in enumerate(list(parent)):
                 if child.tag == "bsdf" and child.get("id") == bsdf_id:
-                    new = ET.fromstring(to_xml(spec, id=bsdf_id))
                     parent.remove(child)
                     parent.insert(i, new)
                     found = True

@@ -43,15 +43,12 @@ def color(value, default=None) -> np.ndarray | None:
 
 def for_spec(spec):
     """
-    The float64 reference of a BSDF dict (or ``'type key=value'`` string), or None where the
-    package has none.
+    The float64 reference of a BSDF spec in any form (:mod:`mi_brdfs.bsdfspec`), or None where
+    the package has none (for a spec that is not a dict once parsed: XML, a loaded mi.BSDF).
     """
-    if isinstance(spec, str) and not spec.lstrip().startswith("<"):
-        import shlex
+    from ..bsdfspec import parse
 
-        from ..bsdfspec import parse_cli
-        specs = parse_cli(shlex.split(spec))
-        spec = specs[0] if len(specs) == 1 else None
+    spec = parse(spec)
     if not isinstance(spec, dict):
         return None
     kind = spec.get("type")
