@@ -3,8 +3,11 @@ pytest helpers: the checks of :mod:`mi_brdfs.checks` as assertions, for your own
 your own plugin. Each raises ``AssertionError`` with the check's one-line message (what failed,
 by how much, where) and returns the :class:`~mi_brdfs.checks.CheckResult` when it passes::
 
-    import mitsuba as mi, mi_brdfs
-    from mi_brdfs.testing import assert_energy_conserving, assert_sampling_matches_pdf
+    import mitsuba as mi
+    import mi_brdfs
+    from mi_brdfs.testing import (assert_consistent, assert_energy_conserving,
+                                  assert_sampling_matches_pdf)
+    from my_package import MyBSDF  # your mi.BSDF subclass
 
     def test_my_bsdf():
         mi_brdfs.use_variant('llvm_ad_rgb')
@@ -31,44 +34,42 @@ def _assert(result: CheckResult) -> CheckResult:
     return result
 
 
-def assert_sampling_matches_pdf(bsdf, wi=(0.0, 0.0, 1.0), **kwargs) -> CheckResult:
-    """χ² test of ``sample()`` against ``pdf()`` at ``wi`` (JIT variants)."""
-    return _assert(chi2_bsdf(bsdf, wi=wi, **kwargs))
+def _assertion(check, name: str, doc: str):
+    """``check`` as an assertion: same arguments, raises AssertionError with its message."""
+
+    def assertion(bsdf, **kwargs) -> CheckResult:
+        return _assert(check(bsdf, **kwargs))
+
+    assertion.__name__ = assertion.__qualname__ = name
+    assertion.__doc__ = doc
+    return assertion
 
 
-def assert_consistent(bsdf, **kwargs) -> CheckResult:
-    """weight = eval/pdf, bs.pdf = pdf(bs.wo), eval_pdf = (eval, pdf), valid sampled flags."""
-    return _assert(check_consistency(bsdf, **kwargs))
-
-
-def assert_energy_conserving(bsdf, **kwargs) -> CheckResult:
-    """Directional albedo E(θ) ≤ 1 (within its Monte Carlo error) at every incident angle."""
-    return _assert(check_energy(bsdf, **kwargs))
-
-
-def assert_albedo_matches_eval(bsdf, **kwargs) -> CheckResult:
-    """E(θ) from sample() weights = E(θ) from eval() (float64 reference or quadrature)."""
-    return _assert(check_albedo_agreement(bsdf, **kwargs))
-
-
-def assert_reciprocal(bsdf, **kwargs) -> CheckResult:
-    """f(a, b) = f(b, a) at random pairs."""
-    return _assert(check_reciprocity(bsdf, **kwargs))
-
-
-def assert_positive(bsdf, **kwargs) -> CheckResult:
-    """eval ≥ 0 and pdf ≥ 0, finite, over the whole sphere."""
-    return _assert(check_positivity(bsdf, **kwargs))
-
-
-def assert_stable(bsdfs, **kwargs) -> CheckResult:
-    """No NaN/Inf/negative values at stress directions for one BSDF or a list (a grid)."""
-    return _assert(check_stability(bsdfs, **kwargs))
-
-
-def assert_furnace(bsdf, **kwargs) -> CheckResult:
-    """The white furnace render is finite and matches the image its albedo curve predicts."""
-    return _assert(check_furnace(bsdf, **kwargs))
+assert_sampling_matches_pdf = _assertion(
+    chi2_bsdf, "assert_sampling_matches_pdf",
+    "χ² test of ``sample()`` against ``pdf()`` at ``wi`` (default: normal incidence; JIT "
+    "variants).")
+assert_consistent = _assertion(
+    check_consistency, "assert_consistent",
+    "weight = eval/pdf, bs.pdf = pdf(bs.wo), eval_pdf = (eval, pdf), valid sampled flags.")
+assert_energy_conserving = _assertion(
+    check_energy, "assert_energy_conserving",
+    "∫ f cosθo dωo ≤ 1 at every incident angle (within the Monte Carlo error), estimated from "
+    "``sample()`` weights and from ``eval()``.")
+assert_albedo_matches_eval = _assertion(
+    check_albedo_agreement, "assert_albedo_matches_eval",
+    "E(θ) from sample() weights = E(θ) from eval() (float64 reference or quadrature).")
+assert_reciprocal = _assertion(
+    check_reciprocity, "assert_reciprocal", "f(a, b) = f(b, a) at random pairs.")
+assert_positive = _assertion(
+    check_positivity, "assert_positive",
+    "eval ≥ 0 and pdf ≥ 0, finite, over the whole sphere.")
+assert_stable = _assertion(
+    check_stability, "assert_stable",
+    "No NaN/Inf/negative values at stress directions, for one BSDF or a list (a grid).")
+assert_furnace = _assertion(
+    check_furnace, "assert_furnace",
+    "The white furnace render is finite and matches the image its albedo curve predicts.")
 
 
 def assert_ndf_normalized(D, alpha: float, label: str = "D", **kwargs) -> CheckResult:

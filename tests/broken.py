@@ -14,13 +14,14 @@ be specific (the other checks still pass on it where they should):
 ``reciprocal`` f = (2/π) ρ cosθi: depends on the incident side only (reciprocity)
 ``nan``        eval and pdf are 0/0 = NaN for cosθo < 1e-3 (stability, positivity)
 ``negative``   eval is negative for φo < 0 (positivity)
+``eval``       eval() is 3× f·cosθo (albedo 1.5), sample() weights are right (energy, consistency)
 =============  ==========================================================================
 """
 
 import drjit as dr
 import mitsuba as mi
 
-DEFECTS = ("none", "pdf", "weight", "bspdf", "energy", "reciprocal", "nan", "negative")
+DEFECTS = ("none", "pdf", "weight", "bspdf", "energy", "reciprocal", "nan", "negative", "eval")
 
 
 def register_broken():
@@ -76,13 +77,14 @@ def register_broken():
             return bs, dr.select(ok, weight, 0.0)
 
         def eval(self, ctx, si, wo, active=True):
-            return self._eval_pdf(si, wo, active)[0]
+            return self.eval_pdf(ctx, si, wo, active)[0]
 
         def pdf(self, ctx, si, wo, active=True):
             return self._eval_pdf(si, wo, active)[1]
 
         def eval_pdf(self, ctx, si, wo, active=True):
-            return self._eval_pdf(si, wo, active)
+            value, pdf = self._eval_pdf(si, wo, active)
+            return (value * 3.0 if self.defect == "eval" else value), pdf
 
         def to_string(self):
             return f"Broken[defect={self.defect}]"

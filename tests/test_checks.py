@@ -90,6 +90,10 @@ def test08_energy_rejects_energy_gain(any_variant):
     result = checks.check_energy(broken("energy"), THETAS, n=2_000)
     assert not result.passed and result.value == pytest.approx(1.5, rel=1e-3)
     assert "creates energy" in result.message
+    # eval() 3× too large (albedo 1.5) while the sample weights are right (albedo 0.5)
+    result = checks.check_energy(broken("eval"), THETAS, n=2_000)
+    assert not result.passed and "from eval()" in result.message, result.message
+    assert result.value == pytest.approx(1.5, rel=1e-3)
 
 
 @pytest.mark.parametrize("name", GOOD)

@@ -1,5 +1,5 @@
 """
-The speed-vs-accuracy benchmark (issue #7): every plugin and sampling choice measured against
+The speed-vs-accuracy benchmark: every plugin and sampling choice measured against
 the built-ins and each other, as ratios and curves measured side by side in one run (medians of
 interleaved repeats), written as ``validation/SPEED_ACCURACY.md`` with its plots.
 

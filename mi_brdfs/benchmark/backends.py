@@ -17,7 +17,8 @@ from ..render import render
 from ..scenes import load_scene
 from .timing import interleaved, median, median_ratio, timed
 
-#: Targets of issues #2, #4 and #7.
+#: Render-time targets against the built-ins: llvm_ad_rgb, scalar_rgb, and the llvm overhead of
+#: many material instances in one scene.
 TARGET_LLVM, TARGET_SCALAR, TARGET_TRACE = 1.03, 12.0, 1.2
 
 
@@ -28,7 +29,7 @@ class Pair(NamedTuple):
     scene: str
     ours: dict          # defines of the plugin's render
     ref: dict           # defines of the built-in's render
-    target: bool = True  # the issue's ratio targets apply (False: a measurement)
+    target: bool = True  # the ratio targets apply (False: a measurement)
 
 
 PAIRS = [

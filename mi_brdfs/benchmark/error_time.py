@@ -44,12 +44,11 @@ PAIRS = [
 SCENES = {"showcase": {f"{i}-material" for i in SHOWCASE_IDS}, "furnace": {"material"}}
 
 #: Image side per scene (full, quick), large enough that renders take tens to hundreds of ms:
-#: the furnace at 64² rendered in 3–15 ms and the showcase at 64² in 10–80 ms, where one
-#: noisy repeat moved identical kernels (lambert and diffuse; Smith cooktorrance and
-#: roughconductor, the same image) 6–13 % apart on a shared 2-core machine.
+#: the time of a shorter render is dominated by the noise of a shared machine, which then
+#: moves even identical kernels (lambert and diffuse) apart.
 RES = {"showcase": (128, 24), "furnace": (256, 24)}
 
-#: Target of issue #7: time to 1 % relative RMSE at most 1.05 × the built-in's.
+#: Target: time to 1 % relative RMSE at most 1.05 × the built-in's.
 TARGET = 1.05
 
 

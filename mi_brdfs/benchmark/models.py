@@ -72,8 +72,8 @@ def _eval_call(bsdf, n: int, seed: int = 0, sample: bool = False):
 
 def _kernel_seconds(fn) -> float:
     """The kernels' execution time of one call of ``fn`` (DrJit's kernel history): the cost
-    per evaluation, without the tracing of the Python code, a fixed cost per launch (0.2–0.8 ms
-    in Sampling strategies, different for every plugin; a render traces once)."""
+    per evaluation, without the tracing of the Python code, a fixed cost per launch (different
+    for every plugin; a render traces once)."""
     return kernel_timed(fn)[1]
 
 

@@ -24,7 +24,8 @@ def spec(form, lobe, n, rho_d=0.0, k_s=1.0) -> dict:
 
 
 def closed_form(form: str, lobe: str, n: float) -> float | None:
-    """The issue's closed forms of the specular albedo at normal incidence (ks = 1, mirror)."""
+    """The closed forms of the specular albedo at normal incidence (ks = 1, mirror; the table
+    of :mod:`mi_brdfs.scattering.phong`)."""
     if form == "normalized":
         return 1.0
     if lobe != "mirror":
@@ -170,7 +171,7 @@ def section(ctx: Context) -> Section:
     scalar_pass(ctx, s)
     s.markdown = "\n".join([
         "The `phong` plugin against its float64 reference (`mi_brdfs/reference/phong.py`, "
-        "a lobe-aligned quadrature exact at any exponent) and the issue's closed forms. "
+        "a lobe-aligned quadrature exact at any exponent) and the closed forms of its albedo. "
         "Specular lobe alone (ρd = 0, ks = 1) unless stated.", "",
         "**Albedo at normal incidence** (sample() mean ± standard error):", "", table, "",
         "**Albedo curves**: the normalized forms stay at or below 1 and fall towards grazing "

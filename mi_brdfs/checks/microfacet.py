@@ -25,7 +25,7 @@ import numpy as np
 from ..reference.quadrature import direction, sphere_grid
 from .result import CheckResult
 
-#: Tolerance of both integrals (the issue's 1e-3; the quadrature error is below 1e-5).
+#: Tolerance of both integrals (the quadrature error is below 1e-5).
 TOL = 1e-3
 
 

@@ -23,8 +23,8 @@ def direction(theta: float, phi: float = 0.0) -> np.ndarray:
 def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
     """
     Gauss-Legendre nodes and weights on [−1, 1], cached: NumPy computes them as the eigenvalues
-    of an n×n matrix, 10 ms for n = 400, and up to 0.7 s when its BLAS threads compete with
-    drjit's for the cores (measured on 2 cores while the test suite ran).
+    of an n×n matrix, which is slow for large n, the more so when its BLAS threads compete with
+    drjit's for the cores.
     """
     x, w = np.polynomial.legendre.leggauss(n)
     x.flags.writeable = w.flags.writeable = False

@@ -382,7 +382,8 @@ def test16_reference_albedo_at_most_one(np_rng):
                 for theta in np.radians([0, 30, 60, 80, 89, 89.9]):
                     worst = max(worst, float(model.albedo(theta, 96, 256)[0]))
     assert worst <= 1 + 1e-5, worst
-    # V-cavity Beckmann α = 0.5 at normal incidence: the physics-notes number
+    # V-cavity Beckmann α = 0.5 at normal incidence: the single-scattering loss the plugin's
+    # docstring quotes (E = 0.89)
     assert ref.CookTorrance(0.5, fresnel="none").albedo(0.0)[0] == pytest.approx(0.8924, abs=1e-4)
 
 

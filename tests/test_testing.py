@@ -1,0 +1,84 @@
+"""
+mi_brdfs.testing: every assertion passes a correct BSDF (returning the check's result) and
+raises AssertionError with the check's one-line message on a broken one; the module
+docstring's example runs as written.
+"""
+
+import re
+import textwrap
+
+import mitsuba as mi
+import pytest
+
+from broken import broken, register_broken
+from mi_brdfs import testing
+
+GOOD = {"type": "lambert", "reflectance": 0.5}
+
+#: assertion -> (arguments for a correct BSDF, arguments for a broken one)
+CASES = {
+    "assert_sampling_matches_pdf": ((GOOD,), (broken("pdf"),)),
+    "assert_consistent": ((GOOD,), (broken("bspdf"),)),
+    "assert_energy_conserving": ((GOOD,), (broken("eval"),)),
+    "assert_albedo_matches_eval": ((GOOD,), (broken("weight"),)),
+    "assert_reciprocal": ((GOOD,), (broken("reciprocal"),)),
+    "assert_positive": ((GOOD,), (broken("negative"),)),
+    "assert_stable": (([GOOD],), ([broken("nan")],)),
+    "assert_furnace": ((GOOD,), (broken("eval"),)),  # emitter sampling sees eval()
+}
+SMALL = {"assert_energy_conserving": {"thetas_deg": (0.0, 60.0), "n": 4_000},
+         "assert_albedo_matches_eval": {"thetas_deg": (0.0, 60.0), "n": 20_000},
+         "assert_furnace": {"spp": 16, "res": 16, "tol": 0.02},
+         "assert_consistent": {"n": 2_000}}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test01_each_assertion_passes_good_and_fails_broken(variant_llvm_ad_rgb, name):
+    register_broken()
+    assertion = getattr(testing, name)
+    good, bad = CASES[name]
+    kwargs = SMALL.get(name, {})
+    result = assertion(*good, **kwargs)
+    assert result.passed
+    with pytest.raises(AssertionError) as info:
+        assertion(*bad, **kwargs)
+    assert "\n" not in str(info.value) and str(info.value) == str(info.value).strip()
+
+
+def test02_every_public_assertion_is_covered():
+    public = {n for n in dir(testing) if n.startswith("assert_")}
+    covered = set(CASES) | {"assert_ndf_normalized", "assert_weak_furnace"}  # test_checks.py
+    assert public == covered, public ^ covered
+
+
+def test03_docstring_example_runs(variant_llvm_ad_rgb, monkeypatch):
+    """The module docstring's example, with a correct BSDF as ``my_package.MyBSDF``."""
+    import sys
+    import types
+
+    code = textwrap.dedent(re.search(r"::\n\n(.*?)\n\n[A-Z]", testing.__doc__, re.S).group(1))
+
+    class MyBSDF(mi.BSDF):  # a Lambert of ρ = 0.5 that takes a 'roughness' it ignores
+        def __init__(self, props):
+            super().__init__(props)
+            props.get("roughness", 0.0)
+            self.m_flags = int(mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide)
+            self.m_components = [self.m_flags]
+            self.inner = mi.load_dict({"type": "diffuse"})
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            return self.inner.sample(ctx, si, sample1, sample2, active)
+
+        def eval(self, ctx, si, wo, active=True):
+            return self.inner.eval(ctx, si, wo, active)
+
+        def pdf(self, ctx, si, wo, active=True):
+            return self.inner.pdf(ctx, si, wo, active)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.inner.eval_pdf(ctx, si, wo, active)
+
+    monkeypatch.setitem(sys.modules, "my_package", types.SimpleNamespace(MyBSDF=MyBSDF))
+    namespace = {}
+    exec(compile(code, "testing-docstring", "exec"), namespace)  # noqa: S102
+    namespace["test_my_bsdf"]()
