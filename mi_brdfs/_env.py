@@ -73,7 +73,7 @@ class LLVMStatus:
     tried: list = field(default_factory=list)
 
 
-def _version_from_name(path: str) -> int:
+def version_from_name(path: str) -> int:
     """Major version from a library name (libLLVM-15.so.1, libLLVM.so.19.1, llvm-18/lib/...)."""
     for pattern in (r"libLLVM-(\d+)", r"libLLVM\.so\.(\d+)", r"llvm-(\d+)"):
         m = re.search(pattern, path)
@@ -95,7 +95,7 @@ def llvm_candidates() -> list[str]:
                 continue
             seen.add(real)
             result.append(path)
-    return sorted(result, key=_version_from_name, reverse=True)
+    return sorted(result, key=version_from_name, reverse=True)
 
 
 def _cache_file() -> Path:
@@ -244,7 +244,7 @@ def loaded_llvm_problem() -> str | None:
     if user_path == LLVM_DISABLED:
         return None
     paths = [user_path] if user_path else [p for p in llvm_candidates()
-                                           if _version_from_name(p) == major]
+                                           if version_from_name(p) == major]
     for path in paths:
         ok, _, reason = probe_llvm(path)
         if not ok:

@@ -166,9 +166,9 @@ def compare(a, b=None, swap: dict | None = None, spp: int = 64, seed: int = 0,
 def figure(result: Comparison, path, title: str | None = None) -> str:
     """A | B | signed difference (B − A) | FLIP map, one PNG; numbers in the caption."""
     from .imageio import to_srgb8
-    from .plots import _pyplot, _save
+    from .plots import pyplot, save_figure
 
-    plt = _pyplot()
+    plt = pyplot()
     panels = 4 if result.flip is not None else 3
     fig, axes = plt.subplots(1, panels, figsize=(3.3 * panels, 3.7))
     for ax, image, label in ((axes[0], result.a, f"A: {result.labels[0]}"),
@@ -190,7 +190,7 @@ def figure(result: Comparison, path, title: str | None = None) -> str:
     caption = (f"A vs B: {result.ab.row()}\nnoise floor (A, two seeds): {result.noise.row()}"
                f" — {result.verdict()}")
     fig.suptitle((title + "\n" if title else "") + caption, fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def write_outputs(result: Comparison, out: str | Path) -> list[str]:

@@ -12,11 +12,12 @@ import os
 import numpy as np
 
 from .bsdfspec import describe, load_bsdf
-from .checks import _batch
+from .checks import batch
 from .errors import MiBrdfsError
 
 
-def _pyplot():
+def pyplot():
+    """matplotlib's pyplot with the file-only Agg backend, or one line saying how to install it."""
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -26,13 +27,14 @@ def _pyplot():
     return plt
 
 
-def _save(fig, path) -> str:
+def save_figure(fig, path) -> str:
+    """Write ``fig`` to ``path`` (format from the extension) atomically, close it, return the path."""
     from .imageio import atomic_path
 
     path = os.fspath(path)
     with atomic_path(path, os.path.splitext(path)[1] or ".png") as tmp:
         fig.savefig(tmp, dpi=120, bbox_inches="tight")
-    _pyplot().close(fig)
+    pyplot().close(fig)
     return path
 
 
@@ -50,8 +52,8 @@ def lobe_values(spec, theta_i_deg: float, n: int = 721, cosine: bool = True):
     theta_o = np.linspace(-90.0, 90.0, n)
     t = np.radians(theta_o)
     wo = np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=1)
-    wi = _batch.direction(math.radians(-theta_i_deg))  # wi on the negative-x side
-    value = _luminance(_batch.evaluate(bsdf, wi, wo).value)
+    wi = batch.direction(math.radians(-theta_i_deg))  # wi on the negative-x side
+    value = _luminance(batch.evaluate(bsdf, wi, wo).value)
     if not cosine:
         value = np.where(wo[:, 2] > 1e-6, value / np.maximum(wo[:, 2], 1e-6), 0.0)
     return theta_o, value
@@ -60,7 +62,7 @@ def lobe_values(spec, theta_i_deg: float, n: int = 721, cosine: bool = True):
 def plot_lobe(specs, path, thetas_deg=(0.0, 30.0, 60.0, 80.0), log: bool = False,
               cosine: bool = True) -> str:
     """Polar plots of the lobes, one panel per incident angle, every BSDF in each panel."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(1, len(thetas_deg), subplot_kw={"projection": "polar"},
                              figsize=(3.6 * len(thetas_deg), 3.9))
     axes = np.atleast_1d(axes)
@@ -88,14 +90,14 @@ def plot_lobe(specs, path, thetas_deg=(0.0, 30.0, 60.0, 80.0), log: bool = False
     fig.suptitle(f"{what} in the plane of incidence (arrow: towards the light){scale}",
                  fontsize=10)
     axes[-1].legend(loc="upper left", bbox_to_anchor=(1.05, 1.0), fontsize=8)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_albedo(specs, path, thetas_deg=None, n: int | None = None, curves=None) -> str:
     """Directional albedo E(θ) of each BSDF: sample() mean ± 2σ, eval() quadrature, reference."""
     from .checks.albedo import albedo_curve
 
-    plt = _pyplot()
+    plt = pyplot()
     thetas = thetas_deg if thetas_deg is not None else \
         np.degrees(np.arccos(np.linspace(1.0, 0.02, 25)))
     curves = curves or [albedo_curve(spec, thetas, n=n, progress=True) for spec in specs]
@@ -118,7 +120,7 @@ def plot_albedo(specs, path, thetas_deg=None, n: int | None = None, curves=None)
     ax.set_xlim(0, 90)
     ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def slice_directions(res: int, phi_d_deg: float = 90.0):
@@ -142,14 +144,14 @@ def slice_values(spec, res: int = 128, phi_d_deg: float = 90.0) -> np.ndarray:
     """f (without the cosine) on the (θh, θd) slice, (res, res), θd along rows."""
     bsdf = load_bsdf(spec)
     wi, wo = slice_directions(res, phi_d_deg)
-    value = _luminance(_batch.evaluate(bsdf, wi, wo).value)
+    value = _luminance(batch.evaluate(bsdf, wi, wo).value)
     f = np.where(wo[:, 2] > 1e-6, value / np.maximum(wo[:, 2], 1e-6), 0.0)
     return f.reshape(res, res)
 
 
 def plot_slice(specs, path, res: int = 128, phi_d_deg: float = 90.0) -> str:
     """The (θh, θd) image slice of each BSDF side by side, as in BRDF Explorer (log colour)."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(1, len(specs), figsize=(3.4 * len(specs) + 0.8, 3.4))
     axes = np.atleast_1d(axes)
     images = [slice_values(spec, res, phi_d_deg) for spec in specs]
@@ -165,4 +167,4 @@ def plot_slice(specs, path, res: int = 128, phi_d_deg: float = 90.0) -> str:
     axes[0].set_ylabel("θd (degrees)")
     fig.colorbar(shown, ax=list(axes), shrink=0.85, label="f (1/sr)")
     fig.suptitle(f"BRDF slice at φd = {phi_d_deg:g}°", fontsize=10)
-    return _save(fig, path)
+    return save_figure(fig, path)

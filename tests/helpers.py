@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 
-from mi_brdfs.checks._batch import evaluate
-from mi_brdfs.checks._batch import random_directions as _random_directions
-from mi_brdfs.checks._batch import sample as _sample
+from mi_brdfs.checks.batch import evaluate
+from mi_brdfs.checks.batch import random_directions as _random_directions
+from mi_brdfs.checks.batch import sample as _sample
 
 
 def random_directions(rng, n, lower=True):

@@ -17,7 +17,7 @@ from mi_brdfs import _env
     ("/opt/homebrew/opt/llvm/lib/libLLVM.dylib", 0),
 ])
 def test01_version_from_name(path, major):
-    assert _env._version_from_name(path) == major
+    assert _env.version_from_name(path) == major
 
 
 @pytest.fixture
@@ -37,7 +37,7 @@ def test02_probe_rejects_missing_and_non_libraries(cache, tmp_path):
 
 def test03_probe_detects_the_llvm_that_aborts(cache):
     """LLVM 15 (Debian 12's default) aborts drjit's JIT: the probe survives and says so."""
-    bad = [p for p in _env.llvm_candidates() if _env._version_from_name(p) in (15, 16)]
+    bad = [p for p in _env.llvm_candidates() if _env.version_from_name(p) in (15, 16)]
     if not bad:
         pytest.skip("no LLVM 15/16 on this machine")
     ok, _, reason = _env.probe_llvm(bad[0])

@@ -47,7 +47,7 @@ def test01_each_assertion_passes_good_and_fails_broken(variant_llvm_ad_rgb, name
 
 def test02_every_public_assertion_is_covered():
     public = {n for n in dir(testing) if n.startswith("assert_")}
-    covered = set(CASES) | {"assert_ndf_normalized", "assert_weak_furnace"}  # test_checks.py
+    covered = set(CASES) | {"assert_ndf_normalized", "assert_weak_furnace"}  # tests/checks/test_checks.py
     assert public == covered, public ^ covered
 
 

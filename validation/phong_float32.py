@@ -29,7 +29,7 @@ import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
-from mi_brdfs.checks import _batch, check_stability  # noqa: E402
+from mi_brdfs.checks import batch, check_stability  # noqa: E402
 from mi_brdfs.reference import Phong  # noqa: E402
 
 #: Where on the lobe ``eval`` is compared: cosⁿ = e^−x.
@@ -69,7 +69,7 @@ def eval_errors(n: float, lobe: str) -> tuple[float, float]:
             "exponent": n, "lobe": lobe}
     wi, wo = lobe_pairs(n, lobe)
     ref = Phong(0.0, 1.0, n, "normalized", lobe).brdf(wi, wo)[:, 0] * wo[:, 2]
-    ours = _batch.evaluate(mi.load_dict(spec), wi, wo).value[:, 0]
+    ours = batch.evaluate(mi.load_dict(spec), wi, wo).value[:, 0]
     a, b = wi.astype(np.float32), wo.astype(np.float32)
     if lobe == "mirror":
         cos = np.sum((a * np.float32([-1, -1, 1])) * b, axis=1, dtype=np.float32)
@@ -103,7 +103,7 @@ def sampler_stats(n: float, count: int, seed: int = 0) -> tuple[float, float, fl
     wi = np.array([math.sin(THETA_I), 0.0, math.cos(THETA_I)], dtype=np.float32)
     axis = (wi * np.float32([-1, -1, 1])).astype(np.float64)
     u = rng.random((count, 2))
-    s = _batch.sample(mi.load_dict(spec), wi.astype(np.float64), rng.random(count), u)
+    s = batch.sample(mi.load_dict(spec), wi.astype(np.float64), rng.random(count), u)
     ok = np.any(s.weight != 0, axis=1)
     wo = s.wo[ok]
     ours = (float(np.mean(np.all(wo.astype(np.float32) == axis.astype(np.float32), axis=1))),

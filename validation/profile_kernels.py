@@ -36,7 +36,7 @@ def main(argv=None) -> None:
     p.add_argument("--quick", action="store_true", help="a smoke run: 1e4 samples, 2 repeats")
     args = p.parse_args(argv)
     mi_brdfs.use_variant("llvm_ad_rgb")
-    from mi_brdfs.benchmark.strategies import LOBES, _draws, own
+    from mi_brdfs.benchmark.strategies import LOBES, random_draws, own
     from mi_brdfs.benchmark.timing import interleaved, kernel_ir, kernel_timed, traced_kernels
     from mi_brdfs.bsdfspec import load_bsdf
 
@@ -46,7 +46,7 @@ def main(argv=None) -> None:
                   (("cooktorrance smith", ours), ("roughconductor", builtins))
                   for sampler, spec in specs.items()}
     n = 10_000 if args.quick else 2_000_000
-    draws = _draws(math.radians(45.0), n, seed=0)
+    draws = random_draws(math.radians(45.0), n, seed=0)
     bsdfs = {k: load_bsdf(v) for k, v in contenders.items()}
     times = interleaved({k: (lambda b=b: own(b, *draws)) for k, b in bsdfs.items()},
                         repeats=2 if args.quick else 15, timer=kernel_timed)

@@ -104,9 +104,9 @@ def time_to(rows, who: str, reference_spp: int, target: float = 0.01) -> float:
 
 
 def plot(rows_by_pair, path) -> str:
-    from ..plots import _pyplot, _save
+    from ..plots import pyplot, save_figure
 
-    plt = _pyplot()
+    plt = pyplot()
     cols = min(4, len(rows_by_pair))
     lines = math.ceil(len(rows_by_pair) / cols)
     fig, axes = plt.subplots(lines, cols, figsize=(3.6 * cols, 3.2 * lines), squeeze=False)
@@ -126,7 +126,7 @@ def plot(rows_by_pair, path) -> str:
         ax.set_ylabel("relative RMSE", fontsize=8)
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def section(ctx: Context) -> Section:

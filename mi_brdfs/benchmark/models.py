@@ -12,7 +12,7 @@ import numpy as np
 
 from ..bsdfspec import load_bsdf
 from ..campaign.core import Context, Row, Section, md_table
-from ..checks import _batch
+from ..checks import batch
 from ..plugins.materials import conductor_ior
 from ..reference import cooktorrance as ref
 from .timing import interleaved, kernel_timed, median, median_ratio
@@ -57,15 +57,15 @@ NO_MORE = 1.02
 def _eval_call(bsdf, n: int, seed: int = 0, sample: bool = False):
     """A function tracing ``eval_pdf`` (or ``sample``) at n random lanes, unevaluated."""
     rng = np.random.default_rng(seed)
-    wi = _batch.random_directions(rng, n, sphere=False)
-    si = _batch.interaction(wi, n)
+    wi = batch.random_directions(rng, n, sphere=False)
+    si = batch.interaction(wi, n)
     ctx = mi.BSDFContext()
     if sample:
         s1 = mi.Float(rng.random(n, dtype=np.float32))
         s2 = mi.Point2f(mi.Float(rng.random(n, dtype=np.float32)),
                         mi.Float(rng.random(n, dtype=np.float32)))
         return lambda: bsdf.sample(ctx, si, s1, s2)
-    wo = _batch.random_directions(rng, n, sphere=False).astype(np.float32)
+    wo = batch.random_directions(rng, n, sphere=False).astype(np.float32)
     w = mi.Vector3f(mi.Float(wo[:, 0]), mi.Float(wo[:, 1]), mi.Float(wo[:, 2]))
     return lambda: bsdf.eval_pdf(ctx, si, w)
 
@@ -102,7 +102,7 @@ def scalar_cost(a, b, ctx: Context):
         calls = {}
         for key, spec in (("a", a), ("b", b)):
             bsdf = load_bsdf(spec)
-            si = _batch.interaction([0.3, 0.2, 0.932738])
+            si = batch.interaction([0.3, 0.2, 0.932738])
             w = mi.Vector3f(0.1, 0.4, 0.910465)
             c = mi.BSDFContext()
 

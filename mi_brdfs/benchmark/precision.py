@@ -8,18 +8,18 @@ from __future__ import annotations
 
 from .. import checks
 from ..campaign.core import Context, Section, image, md_table
-from ..campaign.extremes import SWEEPS, _param
-from ..plots import _pyplot, _save
+from ..campaign.extremes import SWEEPS, param_name
+from ..plots import pyplot, save_figure
 from .models import jit_seconds
 
 
 def section(ctx: Context) -> Section:
     s = Section("Precision against cost")
     rows, spread = [], []
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     for plugin, name, base, values in SWEEPS[1:] if not ctx.quick else SWEEPS[1:2]:
-        key = _param(name)
+        key = param_name(name)
         values = values if not ctx.quick else values[::4]
         errs, costs = [], []
         for v in values:
@@ -40,7 +40,7 @@ def section(ctx: Context) -> Section:
         ax.set_xlabel("parameter value")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=6)
-    path = _save(fig, ctx.figure("precision_cost.png"))
+    path = save_figure(fig, ctx.figure("precision_cost.png"))
     worst = max(spread, key=lambda x: x[2])
     s.markdown = "\n".join([
         "The float32 error of `eval` (99th percentile at the directions the plugin samples, "

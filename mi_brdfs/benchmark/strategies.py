@@ -21,7 +21,7 @@ import numpy as np
 
 from ..bsdfspec import load_bsdf
 from ..campaign.core import Context, Row, Section, md_table
-from ..checks import _batch
+from ..checks import batch
 from .timing import interleaved, kernel_timed, median
 
 _CT = {"type": "cooktorrance", "alpha": 0.2, "fresnel": "none"}
@@ -46,9 +46,11 @@ LOBES = [
 THETAS = (0.0, 45.0, 75.0)
 
 
-def _draws(theta: float, n: int, seed: int):
+def random_draws(theta: float, n: int, seed: int):
+    """A surface interaction with n lanes at incidence θ and the uniform numbers to sample it
+    with, from ``seed``: the same draws for every strategy compared."""
     rng = np.random.default_rng(seed)
-    si = _batch.interaction(_batch.direction(theta), n)
+    si = batch.interaction(batch.direction(theta), n)
     s1 = mi.Float(rng.random(n, dtype=np.float32))
     s2 = mi.Point2f(mi.Float(rng.random(n, dtype=np.float32)),
                     mi.Float(rng.random(n, dtype=np.float32)))
@@ -91,7 +93,7 @@ def measure(strategies: dict, ctx: Context) -> dict:
     seconds: dict[str, list] = {}
     tracing: dict[str, list] = {}
     for i, t in enumerate(THETAS):
-        draws = _draws(math.radians(t), n, seed=i)
+        draws = random_draws(math.radians(t), n, seed=i)
         funcs = {k: (lambda f=f, b=b: f(b, *draws)) for k, (f, b) in strategies.items()}
         times = interleaved(funcs, repeats=ctx.n(7, 2), timer=kernel_timed)
         for k, f in funcs.items():

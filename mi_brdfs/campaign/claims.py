@@ -7,8 +7,8 @@ import math
 import numpy as np
 
 from .. import checks
-from ..checks import _batch
-from ..plots import _pyplot, _save
+from ..checks import batch
+from ..plots import pyplot, save_figure
 from ..reference import Phong
 from ..reference import cooktorrance as ref
 from .core import Context, Row, Section, image, md_table
@@ -25,8 +25,8 @@ def two_printed_forms(ctx: Context, s: Section) -> str:
     worst, factors, count = 0.0, [], 0
     for eta in (1.2, 1.5, 2.5):
         for m in (0.05, 0.2, 0.6, 1.0):
-            wi = _batch.random_directions(rng, n, sphere=False)
-            wo = _batch.random_directions(rng, n, sphere=False)
+            wi = batch.random_directions(rng, n, sphere=False)
+            wo = batch.random_directions(rng, n, sphere=False)
             h = (wi + wo) / np.linalg.norm(wi + wo, axis=1, keepdims=True)
             F = ref.fresnel_exact(np.sum(wi * h, axis=1), eta, 0.0)[:, 0]
             G = ref.vcavity_g(wi, wo, h)
@@ -56,7 +56,7 @@ def two_printed_forms(ctx: Context, s: Section) -> str:
 
 def glass(ctx: Context, s: Section) -> tuple[str, str]:
     """'Glass reflects about 4 % at normal incidence and 100 % at grazing.'"""
-    plt = _pyplot()
+    plt = pyplot()
     cos = np.cos(np.radians(np.linspace(0, 90, 181)))
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8))
     rows = []
@@ -100,7 +100,7 @@ def glass(ctx: Context, s: Section) -> tuple[str, str]:
     axes[1].set_xlabel("θ (degrees)")
     axes[1].set_ylabel("η")
     fig.colorbar(shown, ax=axes[1], label="ΔF")
-    path = _save(fig, ctx.figure("claims_fresnel.png"))
+    path = save_figure(fig, ctx.figure("claims_fresnel.png"))
     i, j = np.unravel_index(int(np.argmax(np.abs(err))), err.shape)
     s.rows.append(Row("claim", "Schlick's approximation error, dielectrics η ∈ [1.01, 3]",
                       f"max |ΔF| {np.abs(err).max():.3f} at η = {etas[i]:.2f}, "
@@ -153,7 +153,7 @@ def phong_claims(ctx: Context, s: Section) -> tuple[str, str]:
 
 def maxima(ctx: Context, s: Section) -> tuple[str, str]:
     """Where f (and f·cosθo) peaks in the plane of incidence, against the mirror direction."""
-    plt = _pyplot()
+    plt = pyplot()
     theta_o = np.radians(np.linspace(0, 89.95, 4000))
     wo = np.stack([-np.sin(theta_o), 0 * theta_o, np.cos(theta_o)], axis=1)  # mirror side
     models = {
@@ -187,7 +187,7 @@ def maxima(ctx: Context, s: Section) -> tuple[str, str]:
     axes[0].set_ylabel("f / max f")
     axes[-1].legend(fontsize=7)
     return md_table(["model", "θi", "peak of f at θo", "peak of f·cosθo at θo"], rows), \
-        _save(fig, ctx.figure("claims_maxima.png"))
+        save_figure(fig, ctx.figure("claims_maxima.png"))
 
 
 def section(ctx: Context) -> Section:

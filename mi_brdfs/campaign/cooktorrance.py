@@ -9,9 +9,9 @@ import mitsuba as mi
 import numpy as np
 
 from .. import checks
-from ..checks import _batch
+from ..checks import batch
 from ..compare import compare, figure
-from ..plots import _pyplot, _save
+from ..plots import pyplot, save_figure
 from ..reference import cooktorrance as ref
 from ..reference import for_spec
 from .core import Context, Row, Section, image, md_table
@@ -130,7 +130,7 @@ def rendered(ctx: Context, s: Section) -> str:
 
 def g_difference_figure(ctx: Context) -> tuple[str, list]:
     """G_V-cavity − G_Smith (exact G1) in the plane of incidence, for several α."""
-    plt = _pyplot()
+    plt = pyplot()
     alphas = (0.1, 0.3, 0.6, 1.0)
     t = np.radians((np.arange(90) + 0.5))
     ti, to = np.meshgrid(t, t, indexing="xy")  # columns θi, rows θo
@@ -156,12 +156,12 @@ def g_difference_figure(ctx: Context) -> tuple[str, list]:
     fig.colorbar(shown, ax=list(axes), shrink=0.85, label="G_V-cavity − G_Smith")
     fig.suptitle("Where the textbook V-cavity masking departs from Smith's (Beckmann, exact "
                  "G1): at grazing angles, and more with α", fontsize=9)
-    return _save(fig, ctx.figure("ct_g_difference.png")), rows
+    return save_figure(fig, ctx.figure("ct_g_difference.png")), rows
 
 
 def furnace_grid(ctx: Context, s: Section) -> tuple[str, str]:
     """F ≡ 1: albedo ≤ 1 and equal to the float64 reference, for both G and both D."""
-    plt = _pyplot()
+    plt = pyplot()
     thetas = np.degrees(np.arccos(np.linspace(1.0, 0.02, ctx.n(20, 6))))
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
     rows = []
@@ -193,7 +193,7 @@ def furnace_grid(ctx: Context, s: Section) -> tuple[str, str]:
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("directional albedo, F ≡ 1")
     axes[1].legend(fontsize=7, ncol=2)
-    fig_path = _save(fig, ctx.figure("ct_furnace_albedo.png"))
+    fig_path = save_figure(fig, ctx.figure("ct_furnace_albedo.png"))
     table = md_table(["distribution", "masking", "α", "E(0°) reference", "E(0°) sample()",
                       f"E({thetas[-1]:.0f}°) reference", "sample()"], rows)
     return table, fig_path
@@ -234,7 +234,7 @@ def sampling_grid(ctx: Context, s: Section) -> str:
             for theta in thetas:
                 r = checks.chi2_bsdf(ct(distribution=kind, shadowing=shadowing, alpha=alpha,
                                         sample_visible=visible, eta=1.5),
-                                     wi=_batch.direction(math.radians(theta)), res=None, ires=None,
+                                     wi=batch.direction(math.radians(theta)), res=None, ires=None,
                                      test_count=tests, sample_count=ctx.n(1_000_000, 200_000))
                 worst, fails = min(worst, r.value), fails + (not r.passed)
         sampler = "VNDF" if visible else "D cos"
@@ -247,7 +247,7 @@ def sampling_grid(ctx: Context, s: Section) -> str:
         rows.append((kind, shadowing, sampler, f"{worst:.3g}", f"{cons.value:.2g}"))
     for theta in thetas:  # with the diffuse base lobe
         r = checks.chi2_bsdf(ct(alpha=0.2, diffuse_reflectance=0.5, eta=1.5),
-                             wi=_batch.direction(math.radians(theta)), res=None, ires=None,
+                             wi=batch.direction(math.radians(theta)), res=None, ires=None,
                              test_count=tests)
         s.rows.append(Row.of("cooktorrance + diffuse base", r, f"χ², θ = {theta:g}°"))
     return md_table(["distribution", "masking", "sampling", "smallest χ² p-value",

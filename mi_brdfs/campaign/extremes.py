@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import checks
 from ..checks.precision import BREAK
-from ..plots import _pyplot, _save
+from ..plots import pyplot, save_figure
 from .core import Context, Row, Section, image, md_table
 
 #: (plugin, parameter, base spec, values): each sweep varies one parameter.
@@ -30,20 +30,21 @@ SWEEPS = [
 ]
 
 
-def _param(name: str) -> str:
+def param_name(name: str) -> str:
+    """The parameter of a sweep label ('alpha (GGX)' -> 'alpha')."""
     return name.split(" ")[0]
 
 
 def section(ctx: Context) -> Section:
     s = Section("The extremes matrix")
-    plt = _pyplot()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
     panels = {"reflectance": axes[0], "exponent": axes[0], "alpha": axes[1], "eta": axes[2],
               "k": axes[2]}
     rows = []
     n = ctx.n(20_000, 3_000)
     for plugin, name, base, values in SWEEPS:
-        key = _param(name)
+        key = param_name(name)
         values = values if not ctx.quick else values[:: max(1, len(values) // 4)] + values[-1:]
         values = sorted(set(values))
         p99, bad, breakpoint = [], 0, None
@@ -77,7 +78,7 @@ def section(ctx: Context) -> Section:
     axes[0].set_ylabel("99th percentile of |f32 − f64| / f64")
     fig.suptitle("float32 eval against the float64 reference at the directions the BSDF "
                  f"samples (dotted: {BREAK:g})", fontsize=9)
-    path = _save(fig, ctx.figure("extremes_precision.png"))
+    path = save_figure(fig, ctx.figure("extremes_precision.png"))
     s.markdown = "\n".join([
         "Each plugin with one parameter swept to its extremes. For every value: the stability "
         "sweep (NaN, Inf or negative eval, pdf or sample weight at the stress directions: "

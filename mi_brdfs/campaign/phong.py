@@ -8,9 +8,9 @@ import numpy as np
 
 import mi_brdfs
 from .. import checks
-from ..checks import _batch
+from ..checks import batch
 from ..imageio import to_srgb8
-from ..plots import _pyplot, _save
+from ..plots import pyplot, save_figure
 from ..reference import Phong
 from .core import Context, Row, Section, image, md_table
 
@@ -54,7 +54,7 @@ def albedo_table(ctx: Context, s: Section) -> str:
 
 
 def albedo_figure(ctx: Context) -> str:
-    plt = _pyplot()
+    plt = pyplot()
     thetas = np.degrees(np.arccos(np.linspace(1.0, 0.02, ctx.n(24, 8))))
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), sharey=True)
     for ax, lobe in zip(axes, LOBES):
@@ -72,7 +72,7 @@ def albedo_figure(ctx: Context) -> str:
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("specular albedo E(θ), ks = 1, ρd = 0")
     axes[1].legend(fontsize=7, ncol=3, loc="upper right")
-    return _save(fig, ctx.figure("phong_albedo.png"))
+    return save_figure(fig, ctx.figure("phong_albedo.png"))
 
 
 def energy_and_reciprocity(ctx: Context, s: Section) -> str:
@@ -107,7 +107,7 @@ def sampling_and_stability(ctx: Context, s: Section) -> str:
             for n in exponents:
                 for t in thetas:
                     r = checks.chi2_bsdf(spec(form, lobe, n, 0.5, 0.5),
-                                         wi=_batch.direction(math.radians(t)), res=None,
+                                         wi=batch.direction(math.radians(t)), res=None,
                                          ires=None, test_count=tests,
                                          sample_count=ctx.n(1_000_000, 200_000))
                     worst_p, fails = min(worst_p, r.value), fails + (not r.passed)
@@ -131,7 +131,7 @@ def sampling_and_stability(ctx: Context, s: Section) -> str:
 
 
 def furnace_figure(ctx: Context, s: Section) -> str:
-    plt = _pyplot()
+    plt = pyplot()
     res, spp = ctx.n(64, 24), ctx.n(256, 32)
     fig, axes = plt.subplots(1, 3, figsize=(9, 3.4))
     for ax, form in zip(axes, FORMS):
@@ -147,7 +147,7 @@ def furnace_figure(ctx: Context, s: Section) -> str:
         ax.set_yticks([])
     fig.suptitle("White furnace, ρd = ks = 0.5, n = 1 (shown one stop darker: the background "
                  "is 1; brighter than it creates energy)", fontsize=9)
-    return _save(fig, ctx.figure("phong_furnace.png"))
+    return save_figure(fig, ctx.figure("phong_furnace.png"))
 
 
 def scalar_pass(ctx: Context, s: Section) -> None:

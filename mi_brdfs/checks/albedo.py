@@ -26,7 +26,7 @@ import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
 from ..reference.quadrature import sphere_grid
-from . import _batch
+from . import batch
 from .result import CheckResult
 
 #: Incident angles (degrees) of the default albedo curve: dense towards grazing.
@@ -37,7 +37,7 @@ DEFAULT_SAMPLES = {True: 1_000_000, False: 4_000}
 
 
 def _default_n(n: int | None) -> int:
-    return n if n is not None else DEFAULT_SAMPLES[_batch.is_jit()]
+    return n if n is not None else DEFAULT_SAMPLES[batch.is_jit()]
 
 
 def _flags(bsdf) -> int:
@@ -56,7 +56,7 @@ def _mean_err(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _sampled(bsdf, theta: float, n: int, seed: int, ctx):
     rng = np.random.default_rng(seed)
-    s = _batch.sample(bsdf, _batch.direction(theta), rng.random(n), rng.random((n, 2)), ctx)
+    s = batch.sample(bsdf, batch.direction(theta), rng.random(n), rng.random((n, 2)), ctx)
     weight = np.where(np.isfinite(s.weight), s.weight, np.nan)
     ok = np.any(s.weight != 0, axis=1) & np.isfinite(s.pdf)
     pdf_max = float(s.pdf[ok].max()) if ok.any() else 0.0
@@ -108,7 +108,7 @@ def albedo_eval(bsdf, theta: float, n: int | None = None, seed: int = 1,
     rng = np.random.default_rng(seed)
     wo, pdf = _our_directions(rng, n, strategy, sphere=_has(bsdf, "Transmission"))
     ok = pdf > 0
-    value = _batch.evaluate(bsdf, _batch.direction(theta), wo[ok], ctx).value
+    value = batch.evaluate(bsdf, batch.direction(theta), wo[ok], ctx).value
     return _mean_err(np.concatenate([value / pdf[ok, None],
                                      np.zeros((int((~ok).sum()), value.shape[1]))]))
 
@@ -125,7 +125,7 @@ def albedo_quadrature(bsdf, theta: float, n_mu: int = 256, n_phi: int = 256, ctx
     total = 0.0
     for mu_range in ranges:
         wo, weights = sphere_grid(n_mu, n_phi, mu_range)
-        value = _batch.evaluate(bsdf, _batch.direction(theta), wo, ctx).value
+        value = batch.evaluate(bsdf, batch.direction(theta), wo, ctx).value
         total = total + np.einsum("n,nc->c", weights, value)
     return np.asarray(total)
 
@@ -184,7 +184,7 @@ def albedo_curve(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, seed: in
     thetas = np.asarray(thetas_deg, dtype=np.float64)
     delta_only = not (_flags(bsdf) & int(mi.BSDFFlags.Smooth))
     do_eval = "eval" in estimators and not delta_only
-    do_quad = "quadrature" in estimators and not delta_only and _batch.is_jit()
+    do_quad = "quadrature" in estimators and not delta_only and batch.is_jit()
     model = ref.for_spec(spec) if "reference" in estimators and ctx is None else None
     rows = []
     bar = Progress(len(thetas), label=f"albedo {describe(spec)}", unit=" angles") \

@@ -11,7 +11,7 @@ import mitsuba as mi
 
 from ..bsdfspec import load_bsdf
 from ..progress import Progress
-from . import _batch
+from . import batch
 from .albedo import albedo_curve, check_albedo_agreement, check_energy
 from .consistency import check_consistency
 from .furnace import check_furnace
@@ -37,13 +37,13 @@ def run_battery(spec, quick: bool = False, render: bool = False, chi2_res: int |
     pdf integral is too coarse there, p ≈ 1e-12 at 4 and 0.93 at 16).
     """
     load_bsdf(spec)  # fail early, with the plugin's one-line error
-    jit = _batch.is_jit()
+    jit = batch.is_jit()
     n = (100_000 if quick else 1_000_000) if jit else (500 if quick else 4_000)
     steps = [("consistency", lambda: [check_consistency(spec, n=n // 10 if jit else n // 4)])]
     if jit:
         tests = len(CHI2_THETAS)
         steps.append(("χ²", lambda: [
-            _named(chi2_bsdf(spec, wi=_batch.direction(math.radians(t)), res=chi2_res,
+            _named(chi2_bsdf(spec, wi=batch.direction(math.radians(t)), res=chi2_res,
                              ires=chi2_ires, test_count=tests,
                              sample_count=n if quick else 1_000_000), f"chi2 θ={t:g}°")
             for t in CHI2_THETAS]))

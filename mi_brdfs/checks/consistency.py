@@ -19,7 +19,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from . import _batch
+from . import batch
 from .result import CheckResult
 
 #: Relative tolerance of the comparisons: float32 arithmetic in a few dozen operations. Our
@@ -36,8 +36,8 @@ def _rel(a: np.ndarray, b: np.ndarray, floor: float = 1e-7) -> np.ndarray:
 
 def _incident(rng, n: int) -> np.ndarray:
     """Incident directions: uniform over the upper hemisphere, plus normal and grazing ones."""
-    wi = _batch.random_directions(rng, n, sphere=False)
-    special = [_batch.direction(np.radians(t)) for t in (0.0, 84.26, 89.0, 89.9)]
+    wi = batch.random_directions(rng, n, sphere=False)
+    special = [batch.direction(np.radians(t)) for t in (0.0, 84.26, 89.0, 89.9)]
     wi[: len(special)] = special
     return wi
 
@@ -50,11 +50,11 @@ def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = R
     100 000 in JIT variants, 400 in scalar ones). Works in every variant.
     """
     bsdf = load_bsdf(spec)
-    n = n or (100_000 if _batch.is_jit() else 400)
+    n = n or (100_000 if batch.is_jit() else 400)
     rng = np.random.default_rng(seed)
     wi = _incident(rng, n)
-    s = _batch.sample(bsdf, wi, rng.random(n), rng.random((n, 2)), ctx)
-    e = _batch.evaluate(bsdf, wi, s.wo, ctx)
+    s = batch.sample(bsdf, wi, rng.random(n), rng.random((n, 2)), ctx)
+    e = batch.evaluate(bsdf, wi, s.wo, ctx)
     problems, details = [], {"samples": n}
 
     delta = (s.sampled_type & int(mi.BSDFFlags.Delta)) != 0
@@ -92,8 +92,8 @@ def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = R
         problems.append(f"{int(positive_pdf_zero.sum())} samples with a weight but bs.pdf = 0")
 
     # eval_pdf against eval and pdf, at pairs covering the whole sphere (below the horizon too)
-    wo = _batch.random_directions(rng, n, sphere=True)
-    pairs = _batch.evaluate(bsdf, wi, wo, ctx)
+    wo = batch.random_directions(rng, n, sphere=True)
+    pairs = batch.evaluate(bsdf, wi, wo, ctx)
     ep = max(float(_rel(pairs.value, pairs.eval_pdf_value).max(initial=0)),
              float(_rel(pairs.pdf, pairs.eval_pdf_pdf).max(initial=0)))
     details["max_rel_eval_pdf"] = ep

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from . import _batch
+from . import batch
 from .result import CheckResult
 
 
@@ -29,16 +29,16 @@ def check_equal(spec_a, spec_b, n: int | None = None, seed: int = 0, rtol: float
     values near 0). ``details['max']`` holds every quantity's largest difference, compared or not.
     """
     a, b = load_bsdf(spec_a), load_bsdf(spec_b)
-    n = n or (100_000 if _batch.is_jit() else 500)
+    n = n or (100_000 if batch.is_jit() else 500)
     rng = np.random.default_rng(seed)
-    wi = _batch.random_directions(rng, n, sphere=not upper)
-    wo = _batch.random_directions(rng, n, sphere=not upper)
-    ea, eb = _batch.evaluate(a, wi, wo, ctx), _batch.evaluate(b, wi, wo, ctx)
+    wi = batch.random_directions(rng, n, sphere=not upper)
+    wo = batch.random_directions(rng, n, sphere=not upper)
+    ea, eb = batch.evaluate(a, wi, wo, ctx), batch.evaluate(b, wi, wo, ctx)
     errors = {"eval": _rel(ea.value, eb.value, atol).max(axis=1),
               "pdf": _rel(ea.pdf, eb.pdf, atol)}
     if sample:
         u1, u2 = rng.random(n), rng.random((n, 2))
-        sa, sb = _batch.sample(a, wi, u1, u2, ctx), _batch.sample(b, wi, u1, u2, ctx)
+        sa, sb = batch.sample(a, wi, u1, u2, ctx), batch.sample(b, wi, u1, u2, ctx)
         produced = np.any(sa.weight != 0, axis=1) | np.any(sb.weight != 0, axis=1)
         weight_err = _rel(sa.weight, sb.weight, atol).max(axis=1)
         errors["sample weight"] = np.where(produced, weight_err, 0)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..bsdfspec import load_bsdf
-from . import _batch
+from . import batch
 
 #: Incident angles (degrees) at which the lobe is sampled.
 THETAS = (0.0, 45.0, 80.0)
@@ -46,17 +46,17 @@ def eval_precision(spec, n: int | None = None, seed: int = 0, thetas=THETAS) -> 
     if model is None:
         return None
     bsdf = load_bsdf(spec)
-    n = n or (20_000 if _batch.is_jit() else 300)
+    n = n or (20_000 if batch.is_jit() else 300)
     rng = np.random.default_rng(seed)
     errors = []
     for theta in np.radians(thetas):
-        wi = np.asarray(_batch.direction(theta), dtype=np.float32).astype(np.float64)
-        s = _batch.sample(bsdf, wi, rng.random(n), rng.random((n, 2)))
+        wi = np.asarray(batch.direction(theta), dtype=np.float32).astype(np.float64)
+        s = batch.sample(bsdf, wi, rng.random(n), rng.random((n, 2)))
         keep = np.any(s.weight != 0, axis=1)
         wo = s.wo[keep].astype(np.float32).astype(np.float64)
         if not len(wo):
             continue
-        value = _batch.evaluate(bsdf, wi, wo).value
+        value = batch.evaluate(bsdf, wi, wo).value
         exact = model.brdf(np.broadcast_to(wi, wo.shape), wo) * wo[:, 2:3]
         exact = np.broadcast_to(exact, value.shape)
         big = np.abs(exact) > 1e-6 * np.max(np.abs(exact))

@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from . import _batch
+from . import batch
 from .result import CheckResult
 
 #: Relative asymmetry tolerated: float32 evaluation of the same expression with the two
@@ -33,14 +33,14 @@ def reciprocity(spec, n: int | None = None, seed: int = 0, min_cos: float = 1e-3
     (max over channels; 0 where both are 0).
     """
     bsdf = load_bsdf(spec)
-    n = n or (200_000 if _batch.is_jit() else 400)
+    n = n or (200_000 if batch.is_jit() else 400)
     rng = np.random.default_rng(seed)
-    a = _batch.random_directions(rng, n, sphere=False)
-    b = _batch.random_directions(rng, n, sphere=False)
+    a = batch.random_directions(rng, n, sphere=False)
+    b = batch.random_directions(rng, n, sphere=False)
     keep = (a[:, 2] > min_cos) & (b[:, 2] > min_cos)
     a, b = a[keep], b[keep]
-    f_ab = _batch.evaluate(bsdf, a, b).value / b[:, 2:3]
-    f_ba = _batch.evaluate(bsdf, b, a).value / a[:, 2:3]
+    f_ab = batch.evaluate(bsdf, a, b).value / b[:, 2:3]
+    f_ba = batch.evaluate(bsdf, b, a).value / a[:, 2:3]
     scale = np.maximum(np.abs(f_ab), np.abs(f_ba))
     asym = np.where(scale > 0, np.abs(f_ab - f_ba) / np.where(scale > 0, scale, 1), 0.0)
     return dict(a=a, b=b, f_ab=f_ab, f_ba=f_ba, asym=np.nan_to_num(asym, nan=np.inf).max(axis=1))
@@ -76,13 +76,13 @@ def check_positivity(spec, n: int | None = None, seed: int = 1) -> CheckResult:
     from .stability import adversarial_pairs
 
     bsdf = load_bsdf(spec)
-    n = n or (200_000 if _batch.is_jit() else 400)
+    n = n or (200_000 if batch.is_jit() else 400)
     rng = np.random.default_rng(seed)
     stress_wi, stress_wo, _ = adversarial_pairs()
-    wi = np.concatenate([stress_wi, _batch.random_directions(rng, n, sphere=True)])
-    wo = np.concatenate([stress_wo, _batch.random_directions(rng, n, sphere=True)])
+    wi = np.concatenate([stress_wi, batch.random_directions(rng, n, sphere=True)])
+    wo = np.concatenate([stress_wo, batch.random_directions(rng, n, sphere=True)])
     n = len(wi)
-    e = _batch.evaluate(bsdf, wi, wo)
+    e = batch.evaluate(bsdf, wi, wo)
     negative = (e.value < 0).any(axis=1) | (e.pdf < 0)
     nonfinite = ~np.isfinite(e.value).all(axis=1) | ~np.isfinite(e.pdf)
     bad = negative | nonfinite

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
 from ..errors import MiBrdfsError
-from . import _batch
+from . import batch
 from .result import CheckResult
 
 def rotation_to_equator(d) -> np.ndarray:
@@ -62,14 +62,14 @@ def bsdf_adapter(bsdf, wi, ctx=None, rotation=None):
     R = np.eye(3) if rotation is None else np.asarray(rotation, dtype=np.float64)
 
     def sample_func(sample):
-        si = _batch.interaction(wi, dr.width(sample))
+        si = batch.interaction(wi, dr.width(sample))
         bs, weight = bsdf.sample(ctx, si, sample[0], mi.Point2f(sample[1], sample[2]))
         ok = dr.any(mi.unpolarized_spectrum(weight) != 0)
         wo = dr.select(ok, bs.wo, mi.Vector3f(0, 0, 1))
         return _apply(R, wo), dr.select(ok, mi.Float(1.0), mi.Float(0.0))
 
     def pdf_func(wo):
-        return bsdf.pdf(ctx, _batch.interaction(wi, dr.width(wo)), _apply(R.T, wo))
+        return bsdf.pdf(ctx, batch.interaction(wi, dr.width(wo)), _apply(R.T, wo))
 
     return sample_func, pdf_func
 
@@ -86,7 +86,7 @@ RESOLUTIONS = ((5.0, 101, 8), (50.0, 201, 16), (500.0, 301, 32), (float("inf"), 
 def _pilot(bsdf, wi, ctx, n: int):
     """(largest pdf, mean direction) of ``n`` pilot samples, or None if none succeeded."""
     rng = np.random.default_rng(12345)
-    s = _batch.sample(bsdf, wi, rng.random(n), rng.random((n, 2)), ctx)
+    s = batch.sample(bsdf, wi, rng.random(n), rng.random((n, 2)), ctx)
     ok = np.any(s.weight != 0, axis=1) & np.isfinite(s.pdf) & np.isfinite(s.wo).all(axis=1)
     if not ok.any():
         return None

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
 from ..errors import MiBrdfsError
-from . import _batch
+from . import batch
 from .result import CheckResult
 
 ONE_MINUS = 1.0 - 2.0 ** -24
@@ -96,15 +96,15 @@ def sweep_one(spec, n_random: int | None = None, seed: int = 0) -> StabilityRow:
     except MiBrdfsError as e:
         row.rejected = str(e)
         return row
-    n_random = n_random or (20_000 if _batch.is_jit() else 200)
+    n_random = n_random or (20_000 if batch.is_jit() else 200)
     rng = np.random.default_rng(seed)
     wi, wo, labels = adversarial_pairs()
-    rwi = _batch.random_directions(rng, n_random)
-    rwo = _batch.random_directions(rng, n_random)
+    rwi = batch.random_directions(rng, n_random)
+    rwo = batch.random_directions(rng, n_random)
     wi, wo = np.concatenate([wi, rwi]), np.concatenate([wo, rwo])
     labels = labels + [f"random wi {np.round(a, 4).tolist()}, wo {np.round(b, 4).tolist()}"
                        for a, b in zip(rwi, rwo)]
-    e = _batch.evaluate(bsdf, wi, wo)
+    e = batch.evaluate(bsdf, wi, wo)
     _count("eval", e.value, labels, row)
     _count("pdf", e.pdf, labels, row)
     _count("eval_pdf", np.concatenate([e.eval_pdf_value, e.eval_pdf_pdf[:, None]], axis=1),
@@ -118,7 +118,7 @@ def sweep_one(spec, n_random: int | None = None, seed: int = 0) -> StabilityRow:
     s2 = np.concatenate([[[g[2], g[3]] for g in grid], rng.random((n_random, 2))])
     slabels = [f"sample at wi {names[g[0]]}, u = ({g[1]:g}, {g[2]:g}, {g[3]:g})" for g in grid]
     slabels += [f"sample at random wi {np.round(a, 4).tolist()}" for a in rwi]
-    s = _batch.sample(bsdf, swi, s1, s2)
+    s = batch.sample(bsdf, swi, s1, s2)
     _count("weight", s.weight, slabels, row)
     # A sample with weight 0 has failed: integrators discard it, and its other fields are
     # undefined (Mitsuba's roughconductor returns bs.pdf = NaN at exactly tangent incidence).

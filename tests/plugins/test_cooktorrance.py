@@ -60,7 +60,7 @@ def test02_diffuse_base_is_a_second_lobe(variants_rgb):
     assert bsdf.component_count() == 2
     assert (bsdf.flags(0), bsdf.flags(1), bsdf.flags()) == (GLOSSY, DIFFUSE, GLOSSY | DIFFUSE)
     assert "diffuse_reflectance.value" in mi.traverse(bsdf)
-    si = checks._batch.interaction([0, 0, 1], 1)
+    si = checks.batch.interaction([0, 0, 1], 1)
     assert np.ravel(bsdf.eval_diffuse_reflectance(si))[0] == pytest.approx(0.3)
     plain = mi.load_dict({"type": CT})
     assert np.ravel(plain.eval_diffuse_reflectance(si))[0] == 0.0

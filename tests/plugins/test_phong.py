@@ -421,8 +421,8 @@ def test20_exponent_gradient_of_eval(variant_llvm_ad_rgb, lobe, np_rng):
     wi = random_directions(np_rng, 500, lower=False)
     wo = wi * [-1, -1, 1] + np_rng.normal(0, 0.2, wi.shape)
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
-    from mi_brdfs.checks._batch import _vector, interaction
-    si, w = interaction(wi, len(wi)), _vector(wo)
+    from mi_brdfs.checks.batch import vectors, interaction
+    si, w = interaction(wi, len(wi)), vectors(wo)
 
     def total(n, grad=False):
         params["exponent"] = mi.Float(n)

@@ -1,5 +1,8 @@
 """
-Calling a BSDF on many directions, in any variant, with NumPy arrays in and out.
+Calling a BSDF on many directions, in any variant, with NumPy arrays in and out: the layer the
+checks, the plots, the campaign and the benchmark share (public API: :func:`evaluate`,
+:func:`sample`, :func:`interaction`, :func:`random_directions`, :func:`direction`,
+:func:`is_jit`).
 
 JIT variants take all directions in one vectorised call; scalar variants call the BSDF once per
 direction (keep ``n`` small there). Spectral variants get the fixed :data:`WAVELENGTHS`. Every
@@ -15,6 +18,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..bsdfspec import load_bsdf
 from ..reference.quadrature import direction  # noqa: F401  (re-exported for the checks)
 
 #: Wavelengths (nm) given to spectral variants, where a BSDF may depend on them.
@@ -22,6 +26,7 @@ WAVELENGTHS = (450.0, 500.0, 550.0, 600.0)
 
 
 def is_jit() -> bool:
+    """Whether the current variant is a JIT one (llvm_*, cuda_*)."""
     return bool(dr.is_jit_v(mi.Float))
 
 
@@ -41,7 +46,8 @@ def _rows(a, n: int) -> np.ndarray:
     return np.broadcast_to(a, (n, 3)) if a.ndim == 1 else a
 
 
-def _vector(a: np.ndarray):
+def vectors(a: np.ndarray):
+    """(n, 3) directions as one ``mi.Vector3f`` of n lanes (JIT variants)."""
     a = np.asarray(a, dtype=np.float32)
     return mi.Vector3f(mi.Float(a[:, 0]), mi.Float(a[:, 1]), mi.Float(a[:, 2]))
 
@@ -55,7 +61,7 @@ def interaction(wi, n: int | None = None, uv=(0.5, 0.5)):
     """
     si = dr.zeros(mi.SurfaceInteraction3f, n or 1) if is_jit() else mi.SurfaceInteraction3f()
     if is_jit():
-        si.wi = _vector(_rows(wi, n or len(wi)))
+        si.wi = vectors(_rows(wi, n or len(wi)))
     else:
         si.wi = mi.Vector3f(*[float(x) for x in np.ravel(wi)[:3]])
     si.uv = mi.Point2f(*uv)
@@ -108,12 +114,13 @@ class Samples:
 
 
 def evaluate(bsdf, wi, wo, ctx=None) -> Evaluation:
-    """``eval``, ``pdf`` and ``eval_pdf`` at the pairs (wi, wo); wi may be one direction."""
-    ctx = ctx or mi.BSDFContext()
+    """``eval``, ``pdf`` and ``eval_pdf`` at the pairs (wi, wo); wi may be one direction. The
+    BSDF in any form of :mod:`mi_brdfs.bsdfspec`."""
+    bsdf, ctx = load_bsdf(bsdf), ctx or mi.BSDFContext()
     wo = np.atleast_2d(np.asarray(wo, dtype=np.float64))
     n = len(wo)
     if is_jit():
-        si, w = interaction(wi, n), _vector(wo)
+        si, w = interaction(wi, n), vectors(wo)
         value, pdf = bsdf.eval(ctx, si, w), bsdf.pdf(ctx, si, w)
         value2, pdf2 = bsdf.eval_pdf(ctx, si, w)
         return Evaluation(_lanes(_channels(value), n), _lanes(pdf, n),
@@ -130,8 +137,9 @@ def evaluate(bsdf, wi, wo, ctx=None) -> Evaluation:
 
 
 def sample(bsdf, wi, sample1, sample2, ctx=None) -> Samples:
-    """``sample()`` with the given random numbers: ``sample1`` (n,), ``sample2`` (n, 2)."""
-    ctx = ctx or mi.BSDFContext()
+    """``sample()`` with the given random numbers: ``sample1`` (n,), ``sample2`` (n, 2). The BSDF
+    in any form of :mod:`mi_brdfs.bsdfspec`."""
+    bsdf, ctx = load_bsdf(bsdf), ctx or mi.BSDFContext()
     sample1 = np.asarray(sample1, dtype=np.float32)
     sample2 = np.atleast_2d(np.asarray(sample2, dtype=np.float32))
     n = len(sample1)

@@ -26,7 +26,7 @@ def test02_quick_benchmark(tmp_path, capsys):
     from pathlib import Path
 
     readme = tmp_path / "README.md"
-    shutil.copy(Path(__file__).resolve().parents[1] / "README.md", readme)
+    shutil.copy(Path(__file__).resolve().parents[2] / "README.md", readme)
     quoted = readme.read_text().count("<!-- bench: ")
     assert quoted >= 40
     assert main(["bench", "--quick", "--out", str(tmp_path), "-q", "--readme", str(readme)]) == 0
@@ -78,12 +78,12 @@ def test04_sampling_strategies_time_the_pdf(variant_llvm_ad_rgb):
     import mitsuba as mi
     import numpy as np
 
-    from mi_brdfs.benchmark.strategies import _draws, own
+    from mi_brdfs.benchmark.strategies import random_draws, own
     from mi_brdfs.benchmark.timing import kernel_ir, traced_kernels
     from mi_brdfs.bsdfspec import load_bsdf
 
     bsdf = load_bsdf({"type": "roughconductor", "alpha": 0.2, "sample_visible": False})
-    draws = _draws(math.radians(45.0), 1000, seed=0)
+    draws = random_draws(math.radians(45.0), 1000, seed=0)
 
     def weight_only():
         _, w = bsdf.sample(mi.BSDFContext(), *draws)
