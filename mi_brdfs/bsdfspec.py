@@ -238,6 +238,24 @@ def parse_value(text: str):
     raise MiBrdfsError(f"'{text}': a value is a number or three comma-separated numbers (rgb)")
 
 
+def _bsdf_file(path: str) -> str:
+    """The text of an XML file that holds one ``<bsdf>``."""
+    import xml.etree.ElementTree as ET
+
+    if not os.path.isfile(path):
+        raise MiBrdfsError(f"BSDF file {path} does not exist")
+    with open(path) as f:
+        text = f.read()
+    try:
+        tag = ET.fromstring(text).tag
+    except ET.ParseError as e:
+        raise MiBrdfsError(f"BSDF file {path}: XML parsing failed: {e}") from None
+    if tag != "bsdf":
+        raise MiBrdfsError(f"{path} holds a <{tag}>, not a <bsdf> (give a BSDF's XML file, a "
+                           f"plugin name such as 'diffuse', or an XML fragment)")
+    return text
+
+
 def parse_cli(tokens: list[str]) -> list:
     """
     BSDFs from command-line tokens. A token without '=' starts a BSDF: a plugin name (followed
@@ -260,10 +278,7 @@ def parse_cli(tokens: list[str]) -> list:
         elif token.lstrip().startswith("<"):
             specs.append(token)
         elif token.endswith(".xml"):
-            if not os.path.isfile(token):
-                raise MiBrdfsError(f"BSDF file {token} does not exist")
-            with open(token) as f:
-                specs.append(f.read())
+            specs.append(_bsdf_file(token))
         else:
             kind = plugin_kind(token)
             if kind == "Unknown":

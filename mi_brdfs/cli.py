@@ -9,6 +9,7 @@ it has and exits with status 130.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import warnings
 from pathlib import Path
@@ -21,6 +22,68 @@ def _one_line_warnings(message, category, filename, lineno, file=None, line=None
     print(f"mi-brdfs: warning: {message}", file=sys.stderr if file is None else file)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``mi-brdfs: error: ...`` and exit status 2."""
+
+    def error(self, message):
+        command = self.prog.split()[-1] if " " in self.prog else None
+        where = f"{command}: " if command else ""
+        self.exit(EXIT_USER_ERROR, f"mi-brdfs: error: {where}{message} (see --help)\n")
+
+
+def _count(text: str) -> int:
+    """A count (samples, resolution, processes): an integer ≥ 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def _seed(text: str) -> int:
+    """A seed: an integer in [0, 2³²)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+    if not 0 <= value < 2**32:
+        raise argparse.ArgumentTypeError(f"must lie in [0, 2^32), got {value}")
+    return value
+
+
+def _finite(text: str) -> float:
+    """A finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
+    return value
+
+
+def _seconds(text: str) -> float:
+    """A duration: a finite number > 0."""
+    value = _finite(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0 seconds, got {text}")
+    return value
+
+
+def _output(*suffixes: str):
+    """An output path with one of ``suffixes`` (not empty, not a directory name)."""
+    def parse(text: str) -> str:
+        if not text.strip():
+            raise argparse.ArgumentTypeError("the output path is empty")
+        if text.endswith(("/", "\\")) or Path(text).suffix.lower() not in suffixes:
+            raise argparse.ArgumentTypeError(
+                f"'{text}' must end in {' or '.join(suffixes)}")
+        return text
+    return parse
+
+
 def _add_variant(p: argparse.ArgumentParser) -> None:
     p.add_argument("--variant", metavar="V",
                    help="Mitsuba variant (default: llvm_ad_rgb where LLVM works, else scalar_rgb)")
@@ -29,7 +92,7 @@ def _add_variant(p: argparse.ArgumentParser) -> None:
 def _parser() -> argparse.ArgumentParser:
     from . import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="mi-brdfs",
         description="Lecture BRDFs (Lambert, Phong, Cook-Torrance) as Mitsuba 3 plugins: "
                     "render, validate and compare them.")
@@ -43,23 +106,25 @@ def _parser() -> argparse.ArgumentParser:
                                    "preview. Ctrl-C keeps and writes what is done.")
     r.add_argument("scene", nargs="?", default="showcase",
                    help="scene XML file or bundled scene name (default: showcase)")
-    r.add_argument("-o", "--output", metavar="OUT.exr",
+    r.add_argument("-o", "--output", metavar="OUT.exr", type=_output(".exr"),
                    help="output EXR (default: ./<scene name>.exr); the PNG goes beside it")
-    r.add_argument("--spp", type=int, metavar="N",
+    r.add_argument("--spp", type=_count, metavar="N",
                    help="samples per pixel (default: the scene's sampler; unlimited with "
                         "--time-budget)")
     _add_variant(r)
-    r.add_argument("--seed", type=int, default=0, metavar="S", help="base seed (default: 0)")
-    r.add_argument("--time-budget", type=float, metavar="SECONDS",
+    r.add_argument("--seed", type=_seed, default=0, metavar="S", help="base seed (default: 0)")
+    r.add_argument("--time-budget", type=_seconds, metavar="SECONDS",
                    help="stop starting passes that would end after this many seconds")
     r.add_argument("-D", dest="defines", action="append", default=[], metavar="name=value",
                    help="override a <default> of the scene (repeatable)")
-    r.add_argument("--pass-spp", type=int, metavar="N", help="samples per pixel in each pass")
-    r.add_argument("--processes", type=int, metavar="N",
+    r.add_argument("--pass-spp", type=_count, metavar="N",
+                   help="samples per pixel in each pass")
+    r.add_argument("--processes", type=_count, metavar="N",
                    help="render processes for scalar scenes with Python plugins, this one "
                         "included (default: one per core when it pays)")
     r.add_argument("--no-png", action="store_true", help="write no PNG preview")
-    r.add_argument("--exposure", type=float, default=0.0, help="PNG exposure in stops (default 0)")
+    r.add_argument("--exposure", type=_finite, default=0.0,
+                   help="PNG exposure in stops (default 0)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_render)
 
@@ -76,7 +141,8 @@ def _parser() -> argparse.ArgumentParser:
     _add_variant(c)
     c.add_argument("--quick", action="store_true", help="10× fewer samples")
     c.add_argument("--render", action="store_true", help="also render the white furnace")
-    c.add_argument("--json", metavar="FILE", help="also write the results as JSON")
+    c.add_argument("--json", metavar="FILE", type=_output(".json"),
+                   help="also write the results as JSON")
     c.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no messages")
     c.set_defaults(func=cmd_check)
 
@@ -88,12 +154,13 @@ def _parser() -> argparse.ArgumentParser:
     f.add_argument("bsdf", nargs="+", metavar="BSDF", help=bsdf_help)
     _add_variant(f)
     f.add_argument("--thetas", metavar="DEG,...", help="incident angles in degrees")
-    f.add_argument("-n", "--samples", type=int, metavar="N", help="samples per angle")
+    f.add_argument("-n", "--samples", type=_count, metavar="N", help="samples per angle")
     f.add_argument("--render", action="store_true", help="render the furnace (first BSDF)")
     f.add_argument("-o", "--output", metavar="OUT.exr", default="furnace.exr",
+                   type=_output(".exr"),
                    help="furnace image (default: ./furnace.exr)")
-    f.add_argument("--spp", type=int, default=128, help="furnace spp (default 128)")
-    f.add_argument("--res", type=int, default=64, help="furnace resolution (default 64)")
+    f.add_argument("--spp", type=_count, default=128, help="furnace spp (default 128)")
+    f.add_argument("--res", type=_count, default=64, help="furnace resolution (default 64)")
     f.set_defaults(func=cmd_furnace)
 
     pl = sub.add_parser("plot", help="lobe, albedo or (θh, θd) slice plots (PNG)",
@@ -104,12 +171,14 @@ def _parser() -> argparse.ArgumentParser:
     pl.add_argument("kind", choices=["lobe", "albedo", "slice"])
     pl.add_argument("bsdf", nargs="+", metavar="BSDF", help=bsdf_help)
     _add_variant(pl)
-    pl.add_argument("-o", "--output", metavar="OUT.png", help="default: ./<kind>.png")
+    pl.add_argument("-o", "--output", metavar="OUT.png", type=_output(".png", ".pdf", ".svg"),
+                    help="default: ./<kind>.png")
     pl.add_argument("--thetas", metavar="DEG,...", help="incident angles (lobe, albedo)")
     pl.add_argument("--log", action="store_true", help="logarithmic radius (lobe)")
     pl.add_argument("--no-cos", action="store_true", help="plot f instead of f·cosθo (lobe)")
-    pl.add_argument("--res", type=int, default=128, help="slice resolution (default 128)")
-    pl.add_argument("-n", "--samples", type=int, metavar="N", help="samples per angle (albedo)")
+    pl.add_argument("--res", type=_count, default=128, help="slice resolution (default 128)")
+    pl.add_argument("-n", "--samples", type=_count, metavar="N",
+                    help="samples per angle (albedo)")
     pl.set_defaults(func=cmd_plot)
 
     cp = sub.add_parser("compare", help="A | B | difference | FLIP of two renders + noise floor",
@@ -123,11 +192,12 @@ def _parser() -> argparse.ArgumentParser:
                     help="B = A with <bsdf id=ID> replaced, e.g. "
                          "--swap \"material=roughconductor alpha=0.3\" (repeatable)")
     _add_variant(cp)
-    cp.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
-    cp.add_argument("--seed", type=int, default=0)
+    cp.add_argument("--spp", type=_count, default=64, help="samples per pixel (default 64)")
+    cp.add_argument("--seed", type=_seed, default=0)
     cp.add_argument("-D", dest="defines", action="append", default=[], metavar="name=value",
                     help="override a <default> of the scene(s) (repeatable)")
     cp.add_argument("-o", "--output", metavar="OUT.png", default="compare.png",
+                    type=_output(".png"),
                     help="figure (default ./compare.png); EXRs beside it")
     cp.set_defaults(func=cmd_compare)
 
@@ -136,9 +206,9 @@ def _parser() -> argparse.ArgumentParser:
                                    "the comparisons with Mitsuba's built-ins and the lecture "
                                    "notes' claims, and write REPORT.md with its figures.")
     v.add_argument("--quick", action="store_true", help="CI-sized: fewer samples and parameters")
-    v.add_argument("--out", metavar="DIR",
-                   help="report folder (default: validation/ of a source checkout, "
-                        "else ./validation-report)")
+    v.add_argument("--out", metavar="DIR", default=".",
+                   help="report folder (default: the current directory; make validate: "
+                        "validation)")
     v.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     v.set_defaults(func=cmd_validate)
 
@@ -148,7 +218,9 @@ def _parser() -> argparse.ArgumentParser:
                                    "against time) and write SPEED_ACCURACY.md with its plots. "
                                    "Run it on a quiet machine; it asserts nothing.")
     b.add_argument("--quick", action="store_true", help="tiny sizes (a smoke run)")
-    b.add_argument("--out", metavar="DIR", help="report folder (default: as for validate)")
+    b.add_argument("--out", metavar="DIR", default=".",
+                   help="report folder (default: the current directory; make bench: "
+                        "validation)")
     b.add_argument("--readme", metavar="FILE",
                    help="also fill in the figures FILE quotes from the run, each marked "
                         "<!-- bench: KEY -->VALUE<!-- /bench --> (make bench: README.md)")
@@ -190,6 +262,9 @@ def cmd_check(args) -> int:
     from .bsdfspec import describe
     from .checks import format_table, run_battery
 
+    from .imageio import check_writable
+
+    json_path = check_writable(args.json) if args.json else None
     variant = mi_brdfs.use_variant(args.variant)
     specs = _bsdfs(args.bsdf)
     failed, report = 0, []
@@ -202,9 +277,9 @@ def cmd_check(args) -> int:
         report.append({"bsdf": describe(spec), "variant": variant, "checks": [
             {"name": r.name, "passed": r.passed, "value": r.value, "tolerance": str(r.tolerance),
              "message": r.message} for r in results]})
-    if args.json:
+    if json_path:
         from .imageio import atomic_path
-        with atomic_path(args.json, ".json") as tmp:
+        with atomic_path(json_path, ".json") as tmp:
             with open(tmp, "w") as f:
                 json.dump(report, f, indent=1, default=float)
     print(f"\n{failed} check(s) failed" if failed else "\nall checks passed")
@@ -264,21 +339,15 @@ def cmd_plot(args) -> int:
 
 def cmd_render(args) -> int:
     import mi_brdfs
-    from .errors import MiBrdfsError
     from .imageio import check_writable, write_exr, write_png
     from .render import render
     from .scenes import parse_defines, scene_path
 
     path = scene_path(args.scene)
-    out = Path(args.output) if args.output else Path.cwd() / f"{path.stem}.exr"
-    if out.suffix.lower() != ".exr":
-        raise MiBrdfsError(f"output must be an .exr file, got {out}")
-    out = check_writable(out)
+    out = check_writable(Path(args.output) if args.output else Path.cwd() / f"{path.stem}.exr")
     png = out.with_suffix(".png")
     if not args.no_png:
         check_writable(png)
-    if args.spp is not None and args.spp < 1:
-        raise MiBrdfsError(f"--spp must be at least 1, got {args.spp}")
     defines = parse_defines(args.defines)
     variant = mi_brdfs.use_variant(args.variant)
 
@@ -306,8 +375,6 @@ def cmd_compare(args) -> int:
 
     if len(args.scenes) > 2 or (len(args.scenes) == 1 and not args.swap):
         raise MiBrdfsError("compare takes A.xml B.xml, or one scene with --swap ID=BSDF")
-    if args.spp < 1:
-        raise MiBrdfsError(f"--spp must be at least 1, got {args.spp}")
     paths = [scene_path(s) for s in args.scenes]
     out = check_writable(args.output)
     swaps = parse_swaps(args.swap)
@@ -324,14 +391,18 @@ def cmd_compare(args) -> int:
 
 
 def _report_folder(args, filename: str) -> Path:
+    """The report folder (created), checked writable for ``filename`` before any work."""
+    from .errors import MiBrdfsError
     from .imageio import check_writable
 
-    if args.out:
-        out = Path(args.out)
-    else:
-        checkout = Path(__file__).resolve().parent.parent / "validation"
-        out = checkout if checkout.is_dir() else Path.cwd() / "validation-report"
-    out.mkdir(parents=True, exist_ok=True)
+    out = Path(args.out).expanduser().absolute()
+    if out.exists() and not out.is_dir():
+        raise MiBrdfsError(f"--out {args.out}: not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise MiBrdfsError(f"--out {args.out}: cannot create the folder: {e.strerror or e}") \
+            from None
     check_writable(out / filename)
     return out
 
@@ -365,7 +436,11 @@ def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) 
                                progress=not args.quiet, what=what, **kwargs)
     rows = [r for s in done for r in s.rows]
     failed = [r for r in rows if not r.ok]
-    print(f"wrote {report}: {len(rows) - len(failed)} of {len(rows)} {what} as expected")
+    if rows and not rows[0].judged:
+        print(f"wrote {report}: {len(rows)} {what}, not judged (quick run: "
+              f"{kwargs.get('quick_note', 'too small to judge')})")
+    else:
+        print(f"wrote {report}: {len(rows) - len(failed)} of {len(rows)} {what} as expected")
     for r in failed:
         print(f"  unexpected: {r.plugin}: {r.check}: {r.result} ({r.verdict})")
     if readme and quotes:
@@ -386,7 +461,8 @@ def cmd_bench(args) -> int:
     _run_report(args, sections(), "measurements", quotes="bench",
                 title="mi_brdfs speed vs accuracy",
                 filename="SPEED_ACCURACY.md", command="mi-brdfs bench", make_target="make bench",
-                quick_note="tiny renders whose timings are too short to judge the targets")
+                quick_note="tiny renders whose timings are too short to judge the targets",
+                judge_quick=False)
     return 0  # a benchmark reports targets met or missed; it does not fail
 
 
@@ -430,6 +506,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("mi-brdfs: interrupted; nothing written", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # the reader went away (| head): stop quietly, as cat does
+        import os
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes stdout
+        return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

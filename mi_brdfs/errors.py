@@ -27,6 +27,8 @@ class MiBrdfsWarning(UserWarning):
 def _show(value) -> str:
     if isinstance(value, Description):
         return str(value)
+    if hasattr(value, "class_name") and callable(value.class_name):  # a Mitsuba object
+        return f"a {value.class_name()}"
     if isinstance(value, str):
         return f'"{value}"'
     if isinstance(value, float):

@@ -68,21 +68,73 @@ def load_scene(path: str | os.PathLike, defines: dict | None = None, bsdfs: dict
     path = scene_path(path)
     params = dict(defines or {})
     params.update({k: str(v) for k, v in kwargs.items()})
+    text = path.read_text()
+    _check_film(path.name, text, params)
     try:
         if not bsdfs:
-            return mi.load_file(str(path), **params)
-        xml = swap_bsdfs(path.read_text(), bsdfs)
-        # relative paths in the scene (textures, meshes) resolve against its folder, as in
-        # mi.load_file; the resolver is global, so it is restored afterwards
-        saved = mi.FileResolver(mi.file_resolver())
-        mi.file_resolver().prepend(str(path.parent))
-        try:
-            return mi.load_string(xml, **params)
-        finally:
-            mi.set_file_resolver(saved)
+            scene = mi.load_file(str(path), **params)
+        else:
+            xml = swap_bsdfs(text, bsdfs)
+            # relative paths in the scene (textures, meshes) resolve against its folder, as in
+            # mi.load_file; the resolver is global, so it is restored afterwards
+            saved = mi.FileResolver(mi.file_resolver())
+            mi.file_resolver().prepend(str(path.parent))
+            try:
+                scene = mi.load_string(xml, **params)
+            finally:
+                mi.set_file_resolver(saved)
     except RuntimeError as e:
         line = mitsuba_error_line(e)
         raise MiBrdfsError(line if path.name in line else f"{path.name}: {line}") from None
+    _check_renderable(path.name, scene)
+    return scene
+
+
+def _check_renderable(name: str, scene) -> None:
+    """A scene that cannot render gets one line; one that renders black a one-line warning."""
+    import warnings
+
+    from .errors import MiBrdfsWarning
+
+    if scene.integrator() is None:
+        raise MiBrdfsError(f'{name} has no <integrator> (add e.g. <integrator type="path"/>)')
+    if not scene.sensors():
+        raise MiBrdfsError(f'{name} has no <sensor> (add e.g. <sensor type="perspective"> '
+                           f'with a <film>)')
+    if not scene.emitters():
+        warnings.warn(f"{name} has no emitter: its image is black", MiBrdfsWarning,
+                      stacklevel=3)
+
+
+def _check_film(name: str, xml: str, params: dict) -> None:
+    """
+    Every film's width and height, where the XML gives them as numbers or as ``$name`` of a
+    ``<default>`` or a define, must be ≥ 1 (Mitsuba reports a width of 0 as a field of view
+    outside [0, 180]).
+    """
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.fromstring(xml)
+    except ET.ParseError:
+        return  # Mitsuba reports it, with the line
+    values = {e.get("name"): e.get("value") for e in root.iter("default")}
+    values.update(params)
+    for film in root.iter("film"):
+        for child in film:
+            key, text = child.get("name"), child.get("value") or ""
+            if key not in ("width", "height"):
+                continue
+            if text.startswith("$"):
+                text = str(values.get(text[1:], ""))
+            try:
+                value = int(text)
+            except ValueError:
+                continue  # not a whole number: Mitsuba says so
+            if value < 1:
+                raise MiBrdfsError(f"{name}: the film's {key} is {value}: it must be at least 1"
+                                   + (f" (from {child.get('value')})"
+                                      if child.get("value", "").startswith("$") else ""))
 
 
 def swap_bsdfs(xml: str, bsdfs: dict) -> str:

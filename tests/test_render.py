@@ -76,3 +76,14 @@ def test08_bad_arguments(variant_scalar_rgb):
         render("no_such_scene.xml", progress=False)
     with pytest.raises(MiBrdfsError, match="time budget must be a positive"):
         render("furnace", time_budget=-1, progress=False)
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test09_time_budget_holds_with_processes(variant_scalar_rgb, processes):
+    """No pass starts that would end after the budget, in the scalar arrangements too (helper
+    processes included); the margin covers the machine's noise, not a late pass."""
+    budget = 2.0
+    result = render("cbox", time_budget=budget, processes=processes, progress=False,
+                    defines={"res": "32", "material": "lambert"})
+    assert result.spp >= 1 and result.wall_time <= 1.25 * budget, (result.arrangement,
+                                                                    result.wall_time)

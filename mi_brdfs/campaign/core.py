@@ -68,6 +68,7 @@ class Row:
     tolerance: str
     passed: bool
     expected_fail: bool = False   # a lecture form that must fail (e.g. energy of 'lecture')
+    judged: bool = True           # False: a quick run's measurement, too short to judge
 
     @classmethod
     def of(cls, plugin: str, result: CheckResult, check: str | None = None,
@@ -77,13 +78,15 @@ class Row:
 
     @property
     def verdict(self) -> str:
+        if not self.judged:
+            return "not judged (quick run)"
         if self.expected_fail:
             return "fails, as expected" if not self.passed else "**passes (expected to fail)**"
         return "pass" if self.passed else "**FAIL**"
 
     @property
     def ok(self) -> bool:
-        return self.passed != self.expected_fail
+        return not self.judged or self.passed != self.expected_fail
 
 
 @dataclass
@@ -119,11 +122,13 @@ def image(ctx: Context, path: Path, alt: str) -> str:
 def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs validation report",
         filename: str = "REPORT.md", command: str = "mi-brdfs validate",
         make_target: str = "make validate", what: str = "checks",
-        quick_note: str = "fewer samples and parameters") -> tuple[Path, list[Section], dict]:
+        quick_note: str = "fewer samples and parameters",
+        judge_quick: bool = True) -> tuple[Path, list[Section], dict]:
     """
     Run the sections in order and write the report; returns its path, the sections and the
     named figures of them all (:attr:`Section.values`, with the run's ``run: minutes`` and
-    ``run: as expected``).
+    ``run: as expected``). With ``judge_quick`` false, a quick run's rows get no verdict (its
+    timings are too short to mean anything).
     """
     import drjit as dr
     import mitsuba as mi
@@ -149,6 +154,9 @@ def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs va
         bar.close()
     total = time.perf_counter() - start
     rows = [r for s in done for r in s.rows]
+    judged = not ctx.quick or judge_quick
+    for r in rows:
+        r.judged = judged
     failed = [r for r in rows if not r.ok]
     command = command + (" --quick" if ctx.quick else "")
     head = [
@@ -163,16 +171,17 @@ def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs va
         "",
         "## Summary",
         "",
-        f"{len(rows) - len(failed)} of {len(rows)} {what} behave as expected"
-        + (f"; **{len(failed)} do not** (listed first below)." if failed else "."),
+        (f"{len(rows) - len(failed)} of {len(rows)} {what} behave as expected"
+         + (f"; **{len(failed)} do not** (listed first below)." if failed else ".")) if judged
+        else f"{len(rows)} {what} taken, none judged: {quick_note}.",
         "",
         md_table(["subject", what, "as expected", "expected to fail, and fail", "unexpected"],
-                 _per_subject(rows)),
+                 _per_subject(rows)) if judged else "",
         "",
         f"<details><summary>all {len(rows)} {what}</summary>",
         "",
         md_table(["subject", "check", "result", "tolerance", "verdict"],
-                 [(r.plugin, r.check, r.result, r.tolerance, r.verdict)
+                 [(r.plugin, r.check, r.result if judged else "—", r.tolerance, r.verdict)
                   for r in sorted(rows, key=lambda r: r.ok)]),
         "",
         "</details>",
@@ -189,7 +198,8 @@ def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs va
     with atomic_path(report, ".md") as tmp:
         Path(tmp).write_text("\n".join(head + body))
     values = {"run: minutes": f"{total / 60:.1f}",
-              "run: as expected": f"{len(rows) - len(failed)} of {len(rows)}"}
+              "run: as expected": f"{len(rows) - len(failed)} of {len(rows)}" if judged
+              else "not judged"}
     for s in done:
         values.update(s.values)
     return report, done, values

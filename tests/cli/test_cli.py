@@ -63,8 +63,8 @@ BAD = {
     "nan reflectance": (["render", "furnace", "-D", "reflectance=nan"], '"reflectance" ='),
     "unknown define": (["render", "furnace", "-D", "colour=1"], "no <default> for colour"),
     "malformed define": (["render", "furnace", "-D", "spp"], "-D expects name=value"),
-    "zero spp": (["render", "furnace", "--spp", "0"], "--spp must be at least 1"),
-    "not exr": (["render", "furnace", "-o", "{tmp}/x.png"], "output must be an .exr file"),
+    "zero spp": (["render", "furnace", "--spp", "0"], "--spp: must be at least 1"),
+    "not exr": (["render", "furnace", "-o", "{tmp}/x.png"], "'{tmp}/x.png' must end in .exr"),
 }
 
 
@@ -80,7 +80,7 @@ def test03_bad_input_one_line_no_output(tmp_path, case):
     assert p.returncode == 2, (p.stdout, p.stderr)
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("mi-brdfs: error: "), p.stderr
-    assert message in lines[0] and "Traceback" not in p.stderr
+    assert message.format(tmp=tmp_path) in lines[0] and "Traceback" not in p.stderr
     assert [f.name for f in tmp_path.iterdir()] == ["bad.xml"]  # nothing written, not even partly
 
 

@@ -1,0 +1,88 @@
+"""
+Bad input on the command line, as a new user types it: every case ends in one line
+``mi-brdfs: error: ...`` naming the argument, the value and what is allowed, exit status 2, no
+traceback and nothing written (run in-process, in an empty folder).
+"""
+
+import pytest
+
+from mi_brdfs.cli import main
+
+SCENES = {
+    "noint.xml": """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm">
+        <integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+        <emitter type="constant"/><shape type="sphere"/></scene>""",
+    "nosensor.xml": """<scene version="3.0.0"><integrator type="path"/>
+        <emitter type="constant"/><shape type="sphere"/></scene>""",
+    "width.xml": """<scene version="3.0.0"><default name="res" value="8"/>
+        <integrator type="path"/><sensor type="perspective"><film type="hdrfilm">
+        <integer name="width" value="$res"/><integer name="height" value="8"/></film></sensor>
+        <emitter type="constant"/><shape type="sphere"/></scene>""",
+}
+
+BAD = [
+    (["render", "furnace", "--spp", "0"], "argument --spp: must be at least 1, got 0"),
+    (["render", "furnace", "--spp", "-3"], "argument --spp: must be at least 1, got -3"),
+    (["render", "furnace", "--spp", "abc"], "'abc' is not a whole number"),
+    (["render", "furnace", "--pass-spp", "0"], "argument --pass-spp: must be at least 1"),
+    (["render", "furnace", "--pass-spp", "-1"], "argument --pass-spp: must be at least 1"),
+    (["render", "furnace", "--processes", "0"], "argument --processes: must be at least 1"),
+    (["render", "furnace", "--processes", "-2"], "argument --processes: must be at least 1"),
+    (["render", "furnace", "--exposure", "nan"], "argument --exposure: must be finite, got nan"),
+    (["render", "furnace", "--exposure", "inf"], "argument --exposure: must be finite"),
+    (["render", "furnace", "--time-budget", "0"], "argument --time-budget: must be > 0"),
+    (["render", "furnace", "--time-budget", "nan"], "argument --time-budget: must be finite"),
+    (["render", "furnace", "--seed", "-1"], "argument --seed: must lie in [0, 2^32)"),
+    (["render", "furnace", "-o", ""], "the output path is empty"),
+    (["render", "furnace", "-o", "x.png"], "'x.png' must end in .exr"),
+    (["render", "noint.xml", "--spp", "1"], "noint.xml has no <integrator>"),
+    (["render", "nosensor.xml", "--spp", "1"], "nosensor.xml has no <sensor>"),
+    (["render", "width.xml", "--spp", "1", "-D", "res=0"], "the film's width is 0"),
+    (["furnace", "lambert", "-n", "0"], "argument -n/--samples: must be at least 1"),
+    (["furnace", "lambert", "-n", "-5"], "argument -n/--samples: must be at least 1"),
+    (["furnace", "lambert", "--render", "--res", "0"], "argument --res: must be at least 1"),
+    (["furnace", "lambert", "--render", "-o", "x.png"], "'x.png' must end in .exr"),
+    (["plot", "slice", "lambert", "--res", "0"], "argument --res: must be at least 1"),
+    (["plot", "albedo", "lambert", "-n", "0"], "argument -n/--samples: must be at least 1"),
+    (["plot", "lobe", "lambert", "-o", "x.exr"], "'x.exr' must end in .png or .pdf or .svg"),
+    (["compare", "furnace", "--swap", "material=diffuse", "-o", "x.exr"],
+     "'x.exr' must end in .png"),
+    (["compare", "furnace", "--swap", "material=diffuse", "--spp", "0"],
+     "argument --spp: must be at least 1"),
+    (["validate", "--out", "/proc/foo"], "--out /proc/foo: cannot create the folder"),
+    (["bench", "--out", "/etc/passwd"], "--out /etc/passwd: not a folder"),
+    (["check", "lambert", "--json", "/nonexistent/x.json"], "folder /nonexistent does not exist"),
+    (["check", "lambert", "--json", "x.txt"], "'x.txt' must end in .json"),
+    (["check", "noint.xml"], "noint.xml holds a <scene>, not a <bsdf>"),
+    # Mitsuba's own words, as for its built-ins: '... plugin of type "lambert": - string "form"'
+    (["check", "lambert", "form=x"], "unreferenced property in"),
+    (["check", "phong", "lobe=sideways"], 'phong: parameter "lobe" = "sideways" is invalid'),
+    (["nosuchcommand"], "invalid choice: 'nosuchcommand'"),
+]
+
+
+@pytest.mark.parametrize("args,message", BAD, ids=[" ".join(a)[:60] for a, _ in BAD])
+def test01_one_line_exit_2_nothing_written(tmp_path, monkeypatch, capsys, args, message):
+    for name, text in SCENES.items():
+        (tmp_path / name).write_text(text)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
+    try:
+        code = main(args)
+    except SystemExit as e:  # argparse
+        code = e.code
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.strip().splitlines() if ln]
+    assert code == 2, (code, err)
+    assert len(lines) == 1 and lines[0].startswith("mi-brdfs: error: "), err
+    assert message in lines[0] and "Traceback" not in err, lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(SCENES)  # nothing written
+
+
+def test02_no_emitter_is_a_warning(tmp_path, capsys):
+    """A scene without an emitter renders (black), with a one-line warning."""
+    scene = tmp_path / "dark.xml"
+    scene.write_text(SCENES["width.xml"].replace('<emitter type="constant"/>', ""))
+    assert main(["render", str(scene), "--spp", "1", "-q", "-o", str(tmp_path / "d.exr")]) == 0
+    err = capsys.readouterr().err
+    assert "mi-brdfs: warning: dark.xml has no emitter: its image is black" in err
