@@ -31,45 +31,25 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USER_ERROR, f"mi-brdfs: error: {where}{message} (see --help)\n")
 
 
-def _count(text: str) -> int:
-    """A count (samples, resolution, processes): an integer ≥ 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
+def _number(convert, what: str, valid, allowed: str):
+    """An argparse type: ``convert(text)``, which must satisfy ``valid``; else one line."""
+    def parse(text: str):
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"'{text}' is not {what}") from None
+        if not valid(value):
+            raise argparse.ArgumentTypeError(f"{allowed}, got {text}")
+        return value
+    return parse
 
 
-def _seed(text: str) -> int:
-    """A seed: an integer in [0, 2³²)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
-    if not 0 <= value < 2**32:
-        raise argparse.ArgumentTypeError(f"must lie in [0, 2^32), got {value}")
-    return value
-
-
-def _finite(text: str) -> float:
-    """A finite number."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
-    return value
-
-
-def _seconds(text: str) -> float:
-    """A duration: a finite number > 0."""
-    value = _finite(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be > 0 seconds, got {text}")
-    return value
+#: Counts (samples, resolution, processes), seeds, finite numbers, durations.
+_count = _number(int, "a whole number", lambda v: v >= 1, "must be at least 1")
+_seed = _number(int, "a whole number", lambda v: 0 <= v < 2**32, "must lie in [0, 2^32)")
+_finite = _number(float, "a number", math.isfinite, "must be finite")
+_seconds = _number(float, "a number", lambda v: math.isfinite(v) and v > 0,
+                   "must be finite and > 0 seconds")
 
 
 def _output(*suffixes: str):
@@ -132,13 +112,19 @@ def _parser() -> argparse.ArgumentParser:
                  "(e.g. roughconductor alpha=0.3 material=Au diffuse), an XML file, or a "
                  "quoted XML fragment")
 
-    c = sub.add_parser("check", help="run every check on one or more BSDFs",
-                       description="Run the whole battery (consistency, χ² sampling, energy, "
-                                   "albedo agreement, reciprocity, positivity, stability; "
-                                   "optionally the furnace render) and print a table. Exit "
-                                   "status 1 when a check fails.")
-    c.add_argument("bsdf", nargs="+", metavar="BSDF", help=bsdf_help)
-    _add_variant(c)
+    def bsdf_command(name, summary, description, *before):
+        """A subcommand taking BSDFs (after the positional arguments ``before``)."""
+        cmd = sub.add_parser(name, help=summary, description=description)
+        for args, kwargs in before:
+            cmd.add_argument(*args, **kwargs)
+        cmd.add_argument("bsdf", nargs="+", metavar="BSDF", help=bsdf_help)
+        _add_variant(cmd)
+        return cmd
+
+    c = bsdf_command("check", "run every check on one or more BSDFs",
+                     "Run the whole battery (consistency, χ² sampling, energy, albedo agreement, "
+                     "reciprocity, positivity, stability; optionally the furnace render) and "
+                     "print a table. Exit status 1 when a check fails.")
     c.add_argument("--quick", action="store_true", help="10× fewer samples")
     c.add_argument("--render", action="store_true", help="also render the white furnace")
     c.add_argument("--json", metavar="FILE", type=_output(".json"),
@@ -146,13 +132,10 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no messages")
     c.set_defaults(func=cmd_check)
 
-    f = sub.add_parser("furnace", help="directional albedo table; optionally the furnace render",
-                       description="Directional albedo E(θ) over incident angles by every "
-                                   "estimator (sample() weights ± error, eval() Monte Carlo, "
-                                   "quadrature, float64 reference), and with --render the "
-                                   "white furnace image (EXR + PNG).")
-    f.add_argument("bsdf", nargs="+", metavar="BSDF", help=bsdf_help)
-    _add_variant(f)
+    f = bsdf_command("furnace", "directional albedo table; optionally the furnace render",
+                     "Directional albedo E(θ) over incident angles by every estimator (sample() "
+                     "weights ± error, eval() Monte Carlo, quadrature, float64 reference), and "
+                     "with --render the white furnace image (EXR + PNG).")
     f.add_argument("--thetas", metavar="DEG,...", help="incident angles in degrees")
     f.add_argument("-n", "--samples", type=_count, metavar="N", help="samples per angle")
     f.add_argument("--render", action="store_true", help="render the furnace (first BSDF)")
@@ -163,14 +146,11 @@ def _parser() -> argparse.ArgumentParser:
     f.add_argument("--res", type=_count, default=64, help="furnace resolution (default 64)")
     f.set_defaults(func=cmd_furnace)
 
-    pl = sub.add_parser("plot", help="lobe, albedo or (θh, θd) slice plots (PNG)",
-                        description="Plots like Disney's BRDF Explorer: 'lobe' (polar, plane of "
-                                    "incidence, several incident angles), 'albedo' (E(θ)), "
-                                    "'slice' (f over θh, θd at φd = 90°). Several BSDFs share "
-                                    "one figure.")
-    pl.add_argument("kind", choices=["lobe", "albedo", "slice"])
-    pl.add_argument("bsdf", nargs="+", metavar="BSDF", help=bsdf_help)
-    _add_variant(pl)
+    pl = bsdf_command("plot", "lobe, albedo or (θh, θd) slice plots (PNG)",
+                      "Plots like Disney's BRDF Explorer: 'lobe' (polar, plane of incidence, "
+                      "several incident angles), 'albedo' (E(θ)), 'slice' (f over θh, θd at "
+                      "φd = 90°). Several BSDFs share one figure.",
+                      (("kind",), {"choices": ["lobe", "albedo", "slice"]}))
     pl.add_argument("-o", "--output", metavar="OUT.png", type=_output(".png", ".pdf", ".svg"),
                     help="default: ./<kind>.png")
     pl.add_argument("--thetas", metavar="DEG,...", help="incident angles (lobe, albedo)")
@@ -201,30 +181,32 @@ def _parser() -> argparse.ArgumentParser:
                     help="figure (default ./compare.png); EXRs beside it")
     cp.set_defaults(func=cmd_compare)
 
-    v = sub.add_parser("validate", help="the validation campaign: REPORT.md with figures",
-                       description="Run every check on every plugin over its parameter grid, "
-                                   "the comparisons with Mitsuba's built-ins and the lecture "
-                                   "notes' claims, and write REPORT.md with its figures.")
-    v.add_argument("--quick", action="store_true", help="CI-sized: fewer samples and parameters")
-    v.add_argument("--out", metavar="DIR", default=".",
-                   help="report folder (default: the current directory; make validate: "
-                        "validation)")
-    v.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    def report_command(name, summary, description, quick, target):
+        """A subcommand that writes a report into --out."""
+        cmd = sub.add_parser(name, help=summary, description=description)
+        cmd.add_argument("--quick", action="store_true", help=quick)
+        cmd.add_argument("--out", metavar="DIR", default=".",
+                         help=f"report folder (default: the current directory; {target}: "
+                              f"validation)")
+        cmd.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+        return cmd
+
+    v = report_command("validate", "the validation campaign: REPORT.md with figures",
+                       "Run every check on every plugin over its parameter grid, the "
+                       "comparisons with Mitsuba's built-ins and the lecture notes' claims, and "
+                       "write REPORT.md with its figures.",
+                       "CI-sized: fewer samples and parameters", "make validate")
     v.set_defaults(func=cmd_validate)
 
-    b = sub.add_parser("bench", help="speed vs accuracy: SPEED_ACCURACY.md with plots",
-                       description="Measure every plugin and sampling choice against the "
-                                   "built-ins (ratios of medians of interleaved repeats, error "
-                                   "against time) and write SPEED_ACCURACY.md with its plots. "
-                                   "Run it on a quiet machine; it asserts nothing.")
-    b.add_argument("--quick", action="store_true", help="tiny sizes (a smoke run)")
-    b.add_argument("--out", metavar="DIR", default=".",
-                   help="report folder (default: the current directory; make bench: "
-                        "validation)")
+    b = report_command("bench", "speed vs accuracy: SPEED_ACCURACY.md with plots",
+                       "Measure every plugin and sampling choice against the built-ins (ratios "
+                       "of medians of interleaved repeats, error against time) and write "
+                       "SPEED_ACCURACY.md with its plots. Run it on a quiet machine; it asserts "
+                       "nothing.", "tiny sizes (a smoke run; its timings are not judged)",
+                       "make bench")
     b.add_argument("--readme", metavar="FILE",
                    help="also fill in the figures FILE quotes from the run, each marked "
                         "<!-- bench: KEY -->VALUE<!-- /bench --> (make bench: README.md)")
-    b.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=cmd_bench)
 
     i = sub.add_parser("info", help="versions, variants, LLVM status and registered plugins")

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import MiBrdfsError
+from .errors import MiBrdfsError, counts
 
 
 @dataclass
@@ -125,6 +125,7 @@ def _render(path, spp: int, seed: int, defines=None, bsdfs=None) -> np.ndarray:
     return image
 
 
+@counts("spp")
 def compare(a, b=None, swap: dict | None = None, spp: int = 64, seed: int = 0,
             defines: dict | None = None, labels=None, with_flip: bool = True,
             defines_b: dict | None = None, swap_a: dict | None = None) -> Comparison:

@@ -60,3 +60,37 @@ def mitsuba_error_line(error: BaseException) -> str:
                 " (a -D name=value must name a <default name=...> of the scene)")
     lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
     return " ".join(lines)
+
+
+class CountError(MiBrdfsError, ValueError):
+    """A count (samples, resolution, processes) that is not a whole number ≥ 1."""
+
+
+def counts(*names: str):
+    """
+    Decorator: the parameters ``names`` of the function, where given (not None), must be whole
+    numbers ≥ 1; else one CountError naming the function, the parameter and the value, before
+    any work (a count of 0 once made Mitsuba divide by zero, a pass of 0 spp loop forever).
+    """
+    import functools
+    import inspect
+    import numbers
+
+    def decorate(fn):
+        signature = inspect.signature(fn)
+        where = f"{fn.__module__.removeprefix('mi_brdfs.')}.{fn.__name__}"
+
+        @functools.wraps(fn)
+        def checked(*args, **kwargs):
+            bound = signature.bind_partial(*args, **kwargs)
+            for name in names:
+                value = bound.arguments.get(name)
+                if value is None:
+                    continue
+                ok = isinstance(value, numbers.Integral) and not isinstance(value, bool)
+                if not ok or value < 1:
+                    raise CountError(f"{where}: {name} = {value!r} is invalid: must be a whole "
+                                     f"number ≥ 1")
+            return fn(*args, **kwargs)
+        return checked
+    return decorate

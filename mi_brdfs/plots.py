@@ -13,7 +13,7 @@ import numpy as np
 
 from .bsdfspec import describe, load_bsdf
 from .checks import batch
-from .errors import MiBrdfsError
+from .errors import MiBrdfsError, counts
 
 
 def pyplot():
@@ -43,6 +43,7 @@ def _luminance(value: np.ndarray) -> np.ndarray:
     return value.mean(axis=1)
 
 
+@counts("n")
 def lobe_values(spec, theta_i_deg: float, n: int = 721, cosine: bool = True):
     """
     The BSDF in the plane of incidence: θo from −90° (the side of ``wi``) to +90° (the mirror
@@ -93,6 +94,7 @@ def plot_lobe(specs, path, thetas_deg=(0.0, 30.0, 60.0, 80.0), log: bool = False
     return save_figure(fig, path)
 
 
+@counts("n")
 def plot_albedo(specs, path, thetas_deg=None, n: int | None = None, curves=None) -> str:
     """Directional albedo E(θ) of each BSDF: sample() mean ± 2σ, eval() quadrature, reference."""
     from .checks.albedo import albedo_curve
@@ -140,6 +142,7 @@ def slice_directions(res: int, phi_d_deg: float = 90.0):
     return wi.reshape(-1, 3), wo.reshape(-1, 3)
 
 
+@counts("res")
 def slice_values(spec, res: int = 128, phi_d_deg: float = 90.0) -> np.ndarray:
     """f (without the cosine) on the (θh, θd) slice, (res, res), θd along rows."""
     bsdf = load_bsdf(spec)
@@ -149,6 +152,7 @@ def slice_values(spec, res: int = 128, phi_d_deg: float = 90.0) -> np.ndarray:
     return f.reshape(res, res)
 
 
+@counts("res")
 def plot_slice(specs, path, res: int = 128, phi_d_deg: float = 90.0) -> str:
     """The (θh, θd) image slice of each BSDF side by side, as in BRDF Explorer (log colour)."""
     plt = pyplot()

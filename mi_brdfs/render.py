@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import MiBrdfsError
+from .errors import MiBrdfsError, counts
 from .progress import Progress
 
 #: Lanes (pixels × spp) per JIT pass: bounds the memory of one pass (about 100 B per lane).
@@ -184,6 +184,7 @@ def _timed_pass_spp(seconds_per_spp: float, spp: int | None) -> int:
     return k if spp is None else min(k, max(1, math.ceil(spp / 8)))
 
 
+@counts("spp", "pass_spp", "processes")
 def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
            time_budget: float | None = None, defines: dict | None = None,
            pass_spp: int | None = None, processes: int | None = None,
@@ -212,7 +213,8 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
     import drjit as dr
     import mitsuba as mi
 
-    from .scenes import load_scene, scene_path as find_scene
+    from .scenes import load_scene
+    from .scenes import scene_path as find_scene
 
     path = find_scene(scene_path)
     defines = dict(defines or {})
@@ -350,6 +352,7 @@ def _worker_init(variant: str, path: str, defines: dict) -> None:
         import drjit as dr
 
         import mi_brdfs
+
         from .scenes import load_scene
         mi_brdfs.use_variant(variant, fallback=False)
         dr.set_thread_count(1)

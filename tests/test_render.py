@@ -70,8 +70,10 @@ def test07_scalar_forced_into_processes(variant_scalar_rgb, monkeypatch):
 
 
 def test08_bad_arguments(variant_scalar_rgb):
-    with pytest.raises(MiBrdfsError, match="spp must be at least 1"):
+    with pytest.raises(MiBrdfsError, match="render.render: spp = 0 is invalid"):
         render("furnace", spp=0, progress=False)
+    with pytest.raises(MiBrdfsError, match="render.render: pass_spp = 0 is invalid"):
+        render("furnace", spp=4, pass_spp=0, progress=False)  # once looped forever
     with pytest.raises(MiBrdfsError, match="does not exist"):
         render("no_such_scene.xml", progress=False)
     with pytest.raises(MiBrdfsError, match="time budget must be a positive"):

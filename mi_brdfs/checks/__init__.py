@@ -22,15 +22,28 @@ check                      what it establishes
 =========================  ========================================================================
 """
 
-from .albedo import (AlbedoCurve, albedo_curve, albedo_eval, albedo_quadrature, albedo_sampled,
-                     check_albedo_agreement, check_energy)
+from .albedo import (
+                     AlbedoCurve,
+                     albedo_curve,
+                     albedo_eval,
+                     albedo_quadrature,
+                     albedo_sampled,
+                     check_albedo_agreement,
+                     check_energy,
+)
 from .battery import format_table, run_battery
 from .consistency import check_consistency
 from .furnace import FurnaceRender, check_furnace, furnace_render
+from .microfacet import (
+                     check_ndf,
+                     check_weak_furnace,
+                     mitsuba_terms,
+                     ndf_normalization,
+                     package_terms,
+                     weak_white_furnace,
+)
 from .pointwise import check_equal
 from .precision import eval_precision
-from .microfacet import (check_ndf, check_weak_furnace, mitsuba_terms, ndf_normalization,
-                         package_terms, weak_white_furnace)
 from .reciprocity import check_positivity, check_reciprocity, reciprocity
 from .result import CheckResult
 from .sampling import chi2_bsdf

@@ -25,6 +25,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
+from ..errors import counts
 from ..reference.quadrature import sphere_grid
 from . import batch
 from .result import CheckResult
@@ -63,6 +64,7 @@ def _sampled(bsdf, theta: float, n: int, seed: int, ctx):
     return _mean_err(weight) + (pdf_max,)
 
 
+@counts("n")
 def albedo_sampled(bsdf, theta: float, n: int | None = None, seed: int = 0, ctx=None):
     """
     E(θ) as the mean ``sample()`` weight over ``n`` samples at incident angle ``theta`` (radians).
@@ -95,6 +97,7 @@ def _our_directions(rng, n: int, strategy: str, sphere: bool):
     return wo, pdf
 
 
+@counts("n")
 def albedo_eval(bsdf, theta: float, n: int | None = None, seed: int = 1,
                 strategy: str = "cosine", ctx=None):
     """
@@ -113,6 +116,7 @@ def albedo_eval(bsdf, theta: float, n: int | None = None, seed: int = 1,
                                      np.zeros((int((~ok).sum()), value.shape[1]))]))
 
 
+@counts("n_mu", "n_phi")
 def albedo_quadrature(bsdf, theta: float, n_mu: int = 256, n_phi: int = 256, ctx=None):
     """
     E(θ) = ∫ eval(ωo) dμ dφ on :func:`~mi_brdfs.reference.quadrature.sphere_grid` (Gauss-Legendre
@@ -169,6 +173,7 @@ class AlbedoCurve:
         return "\n".join(lines)
 
 
+@counts("n")
 def albedo_curve(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, seed: int = 0,
                  estimators=("eval", "quadrature", "reference"), ctx=None,
                  progress: bool = False) -> AlbedoCurve:
@@ -225,6 +230,7 @@ def albedo_curve(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, seed: in
     return curve
 
 
+@counts("n")
 def check_energy(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, sigmas: float = 5.0,
                  curve: AlbedoCurve | None = None) -> CheckResult:
     """
@@ -270,6 +276,7 @@ def check_energy(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, sigmas: 
 AGREEMENT_RTOL = 5e-3
 
 
+@counts("n")
 def check_albedo_agreement(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None,
                            sigmas: float = 5.0, rtol: float = AGREEMENT_RTOL,
                            curve: AlbedoCurve | None = None) -> CheckResult:

@@ -19,6 +19,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
+from ..errors import counts
 from . import batch
 from .result import CheckResult
 
@@ -42,6 +43,7 @@ def _incident(rng, n: int) -> np.ndarray:
     return wi
 
 
+@counts("n")
 def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = RTOL,
                       ctx=None) -> CheckResult:
     """

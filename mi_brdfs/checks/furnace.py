@@ -15,6 +15,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe
+from ..errors import counts
 from ..scenes import load_scene
 from .result import CheckResult
 
@@ -73,6 +74,7 @@ class FurnaceRender:
 THETAS = tuple(np.degrees(np.arccos(np.linspace(1.0, 0.001, 25))).round(3))
 
 
+@counts("spp", "res", "n")
 def furnace_render(spec, spp: int = 64, res: int = 64, seed: int = 0, max_depth: int = 2,
                    predict: bool = True, n: int | None = None) -> FurnaceRender:
     """
@@ -103,6 +105,7 @@ def furnace_render(spec, spp: int = 64, res: int = 64, seed: int = 0, max_depth:
                          nonfinite=int((~finite).sum()), expected=expected, spp=spp, res=res)
 
 
+@counts("spp", "res")
 def check_furnace(spec, spp: int = 64, res: int = 64, tol: float = 0.005, **kwargs) -> CheckResult:
     """
     The furnace image must be finite everywhere and its mean within ``tol`` of the mean that

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
+from ..errors import counts
 from . import batch
 from .result import CheckResult
 
@@ -19,6 +20,7 @@ def _rel(a: np.ndarray, b: np.ndarray, atol: float) -> np.ndarray:
     return np.where(np.abs(a - b) <= atol, 0.0, err)
 
 
+@counts("n")
 def check_equal(spec_a, spec_b, n: int | None = None, seed: int = 0, rtol: float = 1e-5,
                 atol: float = 1e-7, sample: bool = True, upper: bool = False,
                 ctx=None, pdf: bool = True) -> CheckResult:

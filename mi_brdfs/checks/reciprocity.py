@@ -11,6 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
+from ..errors import counts
 from . import batch
 from .result import CheckResult
 
@@ -25,6 +26,7 @@ def _angles(v: np.ndarray) -> str:
     return f"(θ {theta:.1f}°, φ {phi:.1f}°)"
 
 
+@counts("n")
 def reciprocity(spec, n: int | None = None, seed: int = 0, min_cos: float = 1e-3):
     """
     f(a, b) and f(b, a) at ``n`` random pairs over the upper hemisphere.
@@ -46,6 +48,7 @@ def reciprocity(spec, n: int | None = None, seed: int = 0, min_cos: float = 1e-3
     return dict(a=a, b=b, f_ab=f_ab, f_ba=f_ba, asym=np.nan_to_num(asym, nan=np.inf).max(axis=1))
 
 
+@counts("n")
 def check_reciprocity(spec, n: int | None = None, seed: int = 0, rtol: float = RTOL) -> CheckResult:
     """
     Largest relative asymmetry |f(a,b) − f(b,a)| / max over random pairs, and where it occurs.
@@ -68,6 +71,7 @@ def check_reciprocity(spec, n: int | None = None, seed: int = 0, rtol: float = R
                                 "fraction_above_tol": float((r["asym"] > rtol).mean())})
 
 
+@counts("n")
 def check_positivity(spec, n: int | None = None, seed: int = 1) -> CheckResult:
     """
     eval ≥ 0 and pdf ≥ 0 (and finite) at random pairs over the whole sphere and at the stress

@@ -18,6 +18,7 @@ from ..errors import MiBrdfsError
 from . import batch
 from .result import CheckResult
 
+
 def rotation_to_equator(d) -> np.ndarray:
     """
     A rotation matrix (3×3) taking the unit vector ``d`` to (1, 0, 0), a point on the equator

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from ..errors import MiBrdfsError
+from ..errors import MiBrdfsError, counts
 from . import batch
 from .result import CheckResult
 
@@ -88,6 +88,7 @@ def _count(name: str, values: np.ndarray, labels, row: StabilityRow) -> None:
             row.worst.append((name, what, labels[i], values[i].tolist()))
 
 
+@counts("n_random")
 def sweep_one(spec, n_random: int | None = None, seed: int = 0) -> StabilityRow:
     """Every stress direction and ``n_random`` random pairs/samples for one parameter set."""
     row = StabilityRow(spec)
@@ -140,6 +141,7 @@ def parameter_grid(base: dict, **axes) -> list[dict]:
             for values in itertools.product(*(axes[k] for k in names))]
 
 
+@counts("n_random")
 def check_stability(specs, n_random: int | None = None, seed: int = 0) -> CheckResult:
     """
     The sweep over ``specs`` (one spec or a list, e.g. from :func:`parameter_grid`): passes when
