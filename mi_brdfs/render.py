@@ -35,9 +35,8 @@ JIT_LANES_PER_PASS = 1 << 22
 SCALAR_PASS_S = 0.5
 
 #: Seconds a helper process needs to start (import Mitsuba, load the scene); the render path
-#: only spreads a scalar render over processes when that start is repaid.
-#: Measured ad hoc (Cornell box, 2 cores, 5 starts): 0.43–0.54 s from the pool's creation to
-#: one helper's first answer.
+#: only spreads a scalar render over processes when that start is repaid. An estimate of the
+#: time from the pool's creation to one helper's first answer on a small machine.
 WORKER_START_S = 0.5
 
 
