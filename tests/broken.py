@@ -95,3 +95,37 @@ def register_broken():
 
 def broken(defect):
     return {"type": "broken", "defect": defect}
+
+
+def register_wrapper(name, inner, sample=None, value=None, pdf_of=None):
+    """
+    Register ``name``: a BSDF that hands every call to ``inner`` (a loaded BSDF) except what
+    is replaced: ``sample(inner, ctx, si, s1, s2, active)`` for sample(), ``value(inner, ctx,
+    si, wo, active)`` for eval() (and eval_pdf's value), ``pdf_of(ctx, si, wo, active)`` for
+    pdf() (and eval_pdf's pdf). For defects that live in one method of a real model.
+    """
+    class Wrapper(mi.BSDF):
+        def __init__(self, props):
+            super().__init__(props)
+            self.m_flags, self.m_components = inner.m_flags, list(inner.m_components)
+
+        def sample(self, ctx, si, s1, s2, active=True):
+            if sample is not None:
+                return sample(inner, ctx, si, s1, s2, active)
+            return inner.sample(ctx, si, s1, s2, active)
+
+        def eval(self, ctx, si, wo, active=True):
+            if value is not None:
+                return value(inner, ctx, si, wo, active)
+            return inner.eval(ctx, si, wo, active)
+
+        def pdf(self, ctx, si, wo, active=True):
+            if pdf_of is not None:
+                return pdf_of(ctx, si, wo, active)
+            return inner.pdf(ctx, si, wo, active)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+    mi.register_bsdf(name, Wrapper)
+    return {"type": name}

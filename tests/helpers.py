@@ -14,9 +14,10 @@ def random_directions(rng, n, lower=True):
     return _random_directions(rng, n, sphere=lower)
 
 
-def eval_pdf(bsdf, wi, wo, ctx=None):
-    """(f·cos (n, channels), pdf (n,), eval_pdf value, eval_pdf pdf) for pairs (wi, wo)."""
-    e = evaluate(bsdf, wi, wo, ctx)
+def eval_pdf(bsdf, wi, wo, ctx=None, uv=None):
+    """(f·cos (n, channels), pdf (n,), eval_pdf value, eval_pdf pdf) for pairs (wi, wo), at
+    texture coordinates ``uv`` (one or (n, 2))."""
+    e = evaluate(bsdf, wi, wo, ctx, uv)
     return e.value, e.pdf, e.eval_pdf_value, e.eval_pdf_pdf
 
 

@@ -38,6 +38,10 @@ PAIRS = [
          {"metal": "roughconductor"}),
     Pair("cooktorrance (V-cavity) vs roughconductor", "metalbox", {"metal": "cooktorrance"},
          {"metal": "roughconductor"}, target=False),
+    Pair("anisotropic cooktorrance (Smith) vs roughconductor", "brushed",
+         {"metal": "cooktorrance-smith"}, {"metal": "roughconductor"}),
+    Pair("cooktorrance transmission vs roughdielectric", "glass", {"glass": "cooktorrance"},
+         {"glass": "roughdielectric"}),
     # What the glossy lobe costs: Phong (ρd = 0.8 and its defaults ks = 0.2, n = 30) against
     # lambert (ρ = 0.8), both plugins, in the white furnace; "built-in" is lambert here.
     Pair("phong vs lambert (furnace)", "furnace",
@@ -251,8 +255,9 @@ def section(ctx: Context) -> Section:
     s.values.update({f"threads: {m}, {n}": t for m, n, t in threads})
     s.values.update({f"call: {label}, {call}": t for label, call, t in calls})
     s.markdown = "\n".join([
-        "Render time with every surface (Cornell box: `scenes/cbox.xml`) or every metal "
-        "(`scenes/metalbox.xml`) the plugin, against the built-in (for Phong: against "
+        "Render time with every surface (Cornell box: `scenes/cbox.xml`), every metal "
+        "(`scenes/metalbox.xml`; brushed: `scenes/brushed.xml`) or the glass sphere "
+        "(`scenes/glass.xml`) the plugin, against the built-in (for Phong: against "
         "`lambert`, both plugins, in the white furnace `scenes/furnace.xml`, which prices its "
         "glossy lobe), same spp and seeds, medians "
         "of interleaved repeats in one process. In the JIT variant both go through `mi.render`, "

@@ -13,9 +13,9 @@ from .core import Context, Section, run
 
 def sections() -> list:
     """The report's sections, in order."""
-    from . import claims, cooktorrance, extremes, lambert, phong
-    return [lambert.section, phong.section, cooktorrance.section, claims.section,
-            extremes.section]
+    from . import anisotropy, claims, cooktorrance, extremes, lambert, phong, transmission
+    return [lambert.section, phong.section, cooktorrance.section, anisotropy.section,
+            transmission.section, claims.section, extremes.section]
 
 
 __all__ = ["Context", "Section", "run", "sections"]

@@ -12,8 +12,15 @@ Mitsuba's hair model, each with its own error:
   trusted;
 
 plus, where the package has one, the model's **float64 reference** (:mod:`mi_brdfs.reference`).
-BSDFs with transmission are integrated over the whole sphere. Delta lobes have eval = 0, so only
-the sampled estimator sees them.
+BSDFs with transmission are integrated over the whole sphere, and incident angles θ > 90° light
+them from inside. Delta lobes have eval = 0, so only the sampled estimator sees them.
+
+**Transport mode.** For a BSDF that refracts (it declares ``Transmission`` and
+``NonSymmetric``) the albedo is taken in importance transport unless a context is given:
+there ``eval(ωi, ωo)`` is the fraction of the light arriving along ωi that leaves towards ωo,
+so E(θ) ≤ 1 is energy conservation; in radiance transport the refracted part carries the
+factor 1/η² of radiance crossing an interface (Veach 1997, §5.2) and E(θ) from inside glass
+exceeds 1 without any energy being created (:func:`energy_context`).
 """
 
 from __future__ import annotations
@@ -47,6 +54,15 @@ def _flags(bsdf) -> int:
 
 def _has(bsdf, name: str) -> bool:
     return bool(_flags(bsdf) & int(getattr(mi.BSDFFlags, name)))
+
+
+def energy_context(bsdf):
+    """The context the albedo of ``bsdf`` is an energy in: importance transport for a BSDF that
+    refracts (``Transmission`` and ``NonSymmetric``), else None (radiance, Mitsuba's default;
+    the two agree for a symmetric BSDF)."""
+    if _has(bsdf, "Transmission") and _has(bsdf, "NonSymmetric"):
+        return mi.BSDFContext(mi.TransportMode.Importance)
+    return None
 
 
 def _mean_err(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -187,10 +203,11 @@ def albedo_curve(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, seed: in
 
     bsdf = load_bsdf(spec)
     thetas = np.asarray(thetas_deg, dtype=np.float64)
+    model = ref.for_spec(spec) if "reference" in estimators and ctx is None else None
+    ctx = ctx or energy_context(bsdf)
     delta_only = not (_flags(bsdf) & int(mi.BSDFFlags.Smooth))
     do_eval = "eval" in estimators and not delta_only
     do_quad = "quadrature" in estimators and not delta_only and batch.is_jit()
-    model = ref.for_spec(spec) if "reference" in estimators and ctx is None else None
     rows = []
     bar = Progress(len(thetas), label=f"albedo {describe(spec)}", unit=" angles") \
         if progress else None

@@ -56,15 +56,16 @@ def interaction(wi, n: int | None = None, uv=(0.5, 0.5)):
     """
     Surface interaction(s) whose shading frame is the local frame, with ``si.wi`` = ``wi``.
 
-    JIT: ``n`` lanes from ``wi`` of shape (n, 3), or one direction (3,) repeated ``n`` times.
-    Scalar: ``wi`` must be one direction.
+    JIT: ``n`` lanes from ``wi`` of shape (n, 3), or one direction (3,) repeated ``n`` times,
+    and ``uv`` one point or (n, 2). Scalar: ``wi`` and ``uv`` must be one each.
     """
     si = dr.zeros(mi.SurfaceInteraction3f, n or 1) if is_jit() else mi.SurfaceInteraction3f()
     if is_jit():
         si.wi = vectors(_rows(wi, n or len(wi)))
     else:
         si.wi = mi.Vector3f(*[float(x) for x in np.ravel(wi)[:3]])
-    si.uv = mi.Point2f(*uv)
+    uv = np.asarray(uv, dtype=np.float32)
+    si.uv = mi.Point2f(*(mi.Float(c) if is_jit() else float(c) for c in uv.T))
     si.n = mi.Vector3f(0, 0, 1)
     si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
     if mi.is_spectral:  # (UnpolarizedSpectrum: in polarized variants Spectrum is a Mueller matrix)
@@ -113,22 +114,24 @@ class Samples:
     sampled_component: np.ndarray
 
 
-def evaluate(bsdf, wi, wo, ctx=None) -> Evaluation:
-    """``eval``, ``pdf`` and ``eval_pdf`` at the pairs (wi, wo); wi may be one direction. The
-    BSDF in any form of :mod:`mi_brdfs.bsdfspec`."""
+def evaluate(bsdf, wi, wo, ctx=None, uv=None) -> Evaluation:
+    """``eval``, ``pdf`` and ``eval_pdf`` at the pairs (wi, wo); wi may be one direction, ``uv``
+    (the texture coordinates, for textured parameters) one point or one per pair (default
+    (0.5, 0.5)). The BSDF in any form of :mod:`mi_brdfs.bsdfspec`."""
     bsdf, ctx = load_bsdf(bsdf), ctx or mi.BSDFContext()
     wo = np.atleast_2d(np.asarray(wo, dtype=np.float64))
     n = len(wo)
     if is_jit():
-        si, w = interaction(wi, n), vectors(wo)
+        si, w = interaction(wi, n, (0.5, 0.5) if uv is None else uv), vectors(wo)
         value, pdf = bsdf.eval(ctx, si, w), bsdf.pdf(ctx, si, w)
         value2, pdf2 = bsdf.eval_pdf(ctx, si, w)
         return Evaluation(_lanes(_channels(value), n), _lanes(pdf, n),
                           _lanes(_channels(value2), n), _lanes(pdf2, n))
     wi = _rows(wi, n)
+    uvs = np.broadcast_to((0.5, 0.5) if uv is None else uv, (n, 2))
     rows = []
-    for a, b in zip(wi, wo):
-        si, w = interaction(a), mi.Vector3f(*map(float, b))
+    for a, b, c in zip(wi, wo, uvs):
+        si, w = interaction(a, uv=c), mi.Vector3f(*map(float, b))
         value2, pdf2 = bsdf.eval_pdf(ctx, si, w)
         rows.append((_channels(bsdf.eval(ctx, si, w))[0], float(bsdf.pdf(ctx, si, w)),
                      _channels(value2)[0], float(pdf2)))

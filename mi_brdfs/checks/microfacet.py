@@ -13,7 +13,8 @@ Terms are given as callables on NumPy arrays of unit vectors, shape (n, 3): ``D(
 :func:`package_terms` the package's own :mod:`mi_brdfs.scattering.microfacet` (JIT variants); the
 float64 terms of :mod:`mi_brdfs.reference.cooktorrance` are such callables already.
 Integrals use Gauss-Legendre in cosθ and the midpoint rule in φ, with more nodes for sharper
-lobes (about 60/α per dimension).
+lobes (about 60/α per dimension). Every ``alpha`` may be a pair (αu, αv) for an anisotropic
+distribution (its smaller value sets the nodes).
 """
 
 from __future__ import annotations
@@ -29,17 +30,17 @@ from .result import CheckResult
 TOL = 1e-3
 
 
-def _nodes(alpha: float) -> int:
-    return int(np.clip(60.0 / max(alpha, 1e-3), 256, 2048))
+def _nodes(alpha) -> int:
+    return int(np.clip(60.0 / max(float(np.min(alpha)), 1e-3), 256, 2048))
 
 
-def ndf_normalization(D, alpha: float) -> float:
+def ndf_normalization(D, alpha) -> float:
     """∫ D(m) cosθm dωm over the upper hemisphere (1 for a normalised NDF)."""
     m, w = sphere_grid(_nodes(alpha), 256, (0.0, 1.0))
     return float(np.sum(w * np.asarray(D(m), dtype=np.float64) * m[:, 2]))
 
 
-def weak_white_furnace(D, G1, wo: np.ndarray, alpha: float) -> float:
+def weak_white_furnace(D, G1, wo: np.ndarray, alpha) -> float:
     """
     Heitz's weak white furnace integral for one ``wo`` (upper hemisphere).
 
@@ -59,7 +60,7 @@ def weak_white_furnace(D, G1, wo: np.ndarray, alpha: float) -> float:
     return float(np.sum(w * value))
 
 
-def weak_white_furnace_wi(D, G1, wo: np.ndarray, alpha: float) -> float:
+def weak_white_furnace_wi(D, G1, wo: np.ndarray, alpha) -> float:
     """The same integral as Heitz writes it, on a tensor grid over the sphere of ωi."""
     n = _nodes(alpha)
     wo = np.asarray(wo, dtype=np.float64)
@@ -92,16 +93,14 @@ def _jit_terms(D, G1):
             lambda v, m: np.array(G1(vec(v), vec(m)), dtype=np.float64))
 
 
-def mitsuba_terms(kind: str, alpha: float):
+def mitsuba_terms(kind: str, alpha):
     """
     ``(D, G1)`` from ``mi.MicrofacetDistribution`` (``kind`` 'beckmann' or 'ggx'), evaluated in
     the current JIT variant: D = ``eval(m)``, G1 = ``smith_g1(v, m)``.
     """
-    import mitsuba as mi
+    from ..scattering.microfacet import distribution
 
-    from ..scattering.microfacet import mitsuba_type
-
-    distr = mi.MicrofacetDistribution(mitsuba_type(kind), alpha, True)
+    distr = distribution(kind, alpha if np.ndim(alpha) == 0 else tuple(alpha))
     return _jit_terms(distr.eval, distr.smith_g1)
 
 
@@ -109,7 +108,7 @@ def mitsuba_terms(kind: str, alpha: float):
 MASKING = ("smith", "smith_mitsuba", "vcavity")
 
 
-def package_terms(kind: str, alpha: float, masking: str = "smith"):
+def package_terms(kind: str, alpha, masking: str = "smith"):
     """
     ``(D, G1)`` from the package's own terms (:mod:`mi_brdfs.scattering.microfacet`), evaluated
     in the current JIT variant: ``masking`` 'smith' (exact), 'smith_mitsuba' (Mitsuba's
@@ -121,14 +120,17 @@ def package_terms(kind: str, alpha: float, masking: str = "smith"):
 
     if masking not in MASKING:
         raise ValueError(f"masking must be one of {', '.join(MASKING)}, not {masking!r}")
-    a = mi.Float(max(alpha, mf.ALPHA_MIN))
+    if np.ndim(alpha) == 0:
+        a = mi.Float(max(alpha, mf.ALPHA_MIN))
+    else:
+        a = tuple(mi.Float(max(x, mf.ALPHA_MIN)) for x in alpha)
     g1 = {"smith": lambda v, m: mf.smith_g1(kind, a, v, m),
           "smith_mitsuba": lambda v, m: mf.smith_g1_mitsuba(kind, a, v, m),
           "vcavity": mf.vcavity_g1}[masking]
     return _jit_terms(lambda m: mf.ndf(kind, a, m), g1)
 
 
-def check_ndf(D, alpha: float, label: str, tol: float = TOL) -> CheckResult:
+def check_ndf(D, alpha, label: str, tol: float = TOL) -> CheckResult:
     value = ndf_normalization(D, alpha)
     passed = abs(value - 1) <= tol
     msg = (f"NDF: {label}: ∫ D cosθm dω = {value:.6f} "
@@ -136,9 +138,13 @@ def check_ndf(D, alpha: float, label: str, tol: float = TOL) -> CheckResult:
     return CheckResult("ndf", passed, value, tol, msg)
 
 
-def check_weak_furnace(D, G1, alpha: float, label: str, thetas_deg=(0.0, 45.0, 70.0, 84.26),
-                       tol: float = TOL) -> CheckResult:
-    values = [weak_white_furnace(D, G1, direction(math.radians(t)), alpha) for t in thetas_deg]
+def check_weak_furnace(D, G1, alpha, label: str, thetas_deg=(0.0, 45.0, 70.0, 84.26),
+                       tol: float = TOL, phi_deg: float = 0.0) -> CheckResult:
+    """The weak white furnace at each θo of ``thetas_deg``, in the azimuth ``phi_deg`` (which
+    matters for an anisotropic α)."""
+    phi = math.radians(phi_deg)
+    values = [weak_white_furnace(D, G1, direction(math.radians(t), phi), alpha)
+              for t in thetas_deg]
     dev = [abs(v - 1) for v in values]
     i = int(np.argmax(dev))
     passed = dev[i] <= tol

@@ -84,14 +84,39 @@ POLAR_DEG = 45.0
 RESOLUTIONS = ((5.0, 101, 8), (50.0, 201, 16), (500.0, 301, 32), (float("inf"), 401, 32))
 
 
+def _elongation(wo: np.ndarray) -> float:
+    """
+    How much narrower than wide a lobe is: sqrt(λmax/λmin) of the covariance of its directions
+    projected on the plane perpendicular to their mean (1 for a round lobe, αv/αu for an
+    anisotropic microfacet lobe), clipped to [1, 100].
+    """
+    mean = wo.mean(axis=0)
+    norm = np.linalg.norm(mean)
+    if len(wo) < 10 or norm < 1e-6:
+        return 1.0
+    mean = mean / norm
+    a = np.cross(mean, [1.0, 0.0, 0.0] if abs(mean[0]) < 0.9 else [0.0, 1.0, 0.0])
+    a /= np.linalg.norm(a)
+    b = np.cross(mean, a)
+    lam = np.linalg.eigvalsh(np.cov(np.stack([wo @ a, wo @ b])))
+    return float(np.clip(np.sqrt(lam[1] / max(lam[0], 1e-30)), 1.0, 100.0))
+
+
 def _pilot(bsdf, wi, ctx, n: int):
-    """(largest pdf, mean direction) of ``n`` pilot samples, or None if none succeeded."""
+    """
+    (sharpness, mean direction) of ``n`` pilot samples, or None if none succeeded. The
+    sharpness is the largest pdf, times the elongation of the lobe's core (the samples with at
+    least a tenth of that pdf): a lobe of widths w₁ ≤ w₂ has its largest pdf ∝ 1/(w₁ w₂), but
+    needs the resolution of a round lobe of width w₁, whose pdf ∝ 1/w₁².
+    """
     rng = np.random.default_rng(12345)
     s = batch.sample(bsdf, wi, rng.random(n), rng.random((n, 2)), ctx)
     ok = np.any(s.weight != 0, axis=1) & np.isfinite(s.pdf) & np.isfinite(s.wo).all(axis=1)
     if not ok.any():
         return None
-    return float(np.max(s.pdf[ok])), s.wo[ok].mean(axis=0)
+    pdf_max = float(np.max(s.pdf[ok]))
+    core = s.wo[ok & (s.pdf >= 0.1 * pdf_max)]
+    return pdf_max * _elongation(core), s.wo[ok].mean(axis=0)
 
 
 def chi2_settings(bsdf, wi, ctx=None, n: int = 20_000):
@@ -99,7 +124,8 @@ def chi2_settings(bsdf, wi, ctx=None, n: int = 20_000):
     ``(res, ires, pdf_max, lobe)`` for a χ² test of ``bsdf`` at ``wi``, from pilot samples of
     its sharpest lobe: ``pdf_max`` its largest ``bs.pdf`` (sampled alone, through
     ``ctx.component``, so that a sharp lobe mixed with a diffuse one is not hidden by the
-    mixture's weights), ``lobe`` its mean direction, and the resolution from ``pdf_max``.
+    mixture's weights) times the elongation of an anisotropic lobe (:func:`_pilot`), ``lobe``
+    its mean direction, and the resolution from ``pdf_max``.
 
     The histogram cells of ``mitsuba.chi2`` are uniform in (φ, cosθ): near a pole a lobe of
     angular width w spans only w²/2 in cosθ, and the pdf integral over its cell is poor (a

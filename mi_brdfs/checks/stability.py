@@ -131,6 +131,8 @@ def sweep_one(spec, n_random: int | None = None, seed: int = 0) -> StabilityRow:
     bad_wo = produced & ~(norm_err < 1e-3)
     row.counts["bs.wo"] = {"nan": int((produced & np.isnan(s.wo).any(axis=1)).sum()), "inf": 0,
                            "negative": 0, "not unit": int(bad_wo.sum())}
+    for i in np.flatnonzero(bad_wo)[:3]:
+        row.worst.append(("bs.wo", "not a unit vector", slabels[i], s.wo[i].tolist()))
     return row
 
 

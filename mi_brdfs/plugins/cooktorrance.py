@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..scattering import fresnel, microfacet, mixture, vector
 from . import _common
-from .materials import conductor_ior, conductor_names, material_ior  # noqa: F401 (API)
+from .materials import conductor_ior, conductor_names, dielectric_ior, material_ior  # noqa: F401
 
 PLUGIN = "cooktorrance"
 SHADOWING = ("vcavity", "smith")
@@ -35,6 +35,73 @@ def _constant_channels(props, name) -> list[float] | None:
     if kind == T.Color:
         return [float(c) for c in props[name]]
     return None
+
+
+def _read_alpha(props):
+    """(α_u, α_v) from ``alpha`` (the same texture twice) or from ``alpha_u`` and ``alpha_v``,
+    as ``roughconductor`` reads them; warns where a value is below the clamp."""
+    given = [name for name in ("alpha_u", "alpha_v") if name in props]
+    if given:
+        if "alpha" in props:
+            raise ParameterError(PLUGIN, given[0], props[given[0]],
+                                 "must not be given together with alpha (give alpha for an "
+                                 "isotropic surface, alpha_u and alpha_v for an anisotropic one)")
+        if len(given) == 1:
+            other = "alpha_v" if given[0] == "alpha_u" else "alpha_u"
+            raise ParameterError(PLUGIN, given[0], props[given[0]],
+                                 f"needs {other} as well (an anisotropic surface has both)")
+        names = given
+    else:
+        names = ["alpha"]
+    alphas = [_common.texture(props, PLUGIN, name, 0.1, lo=0.0, hi=math.inf) for name in names]
+    for name, tex in zip(names, alphas):
+        low = _common.texture_range(tex)
+        if low is not None and low[0] < ALPHA_MIN_32:
+            _common.warn(PLUGIN, f"{name} = {low[0]:g} is clamped to {mf.ALPHA_MIN:g}, as in "
+                                 f"Mitsuba's microfacet models")
+    return alphas[0], alphas[-1]
+
+
+#: What ``transmission`` excludes, and why (one line each).
+NOT_WITH_TRANSMISSION = {
+    "material": "names a conductor; transmission needs a dielectric (give eta, or int_ior and "
+                "ext_ior)",
+    "diffuse_reflectance": "a diffuse base under a transmitting interface is not part of the "
+                           "model (Walter et al. 2007)",
+}
+
+
+def _read_dielectric(props) -> float:
+    """
+    The relative index η = η_int/η_ext of ``transmission``: ``eta`` (a number ≠ 1, with ``k``
+    absent or 0) or ``int_ior``/``ext_ior`` (numbers or names, as ``roughdielectric`` takes
+    them; defaults ``bk7`` inside and ``air`` outside).
+    """
+    for name, why in NOT_WITH_TRANSMISSION.items():
+        _common.reject(props, PLUGIN, name, f"must not be given with transmission = true: {why}")
+    if "k" in props and not (props.type("k") in (mi.Properties.Type.Float,
+                                                 mi.Properties.Type.Integer)
+                             and float(props["k"]) == 0.0):
+        raise ParameterError(PLUGIN, "k", props["k"], "must be 0 (or absent) with transmission "
+                                                      "= true: only a dielectric transmits")
+    if "eta" in props:
+        for name in ("int_ior", "ext_ior"):
+            _common.reject(props, PLUGIN, name, "must not be given together with eta (eta is "
+                                                "int_ior/ext_ior)")
+        eta = _common.number(props, PLUGIN, "eta", 1.5, lo=0.0, lo_open=True)
+        where = "eta"
+    else:
+        inside = dielectric_ior(props["int_ior"] if "int_ior" in props else "bk7", PLUGIN,
+                                "int_ior")
+        outside = dielectric_ior(props["ext_ior"] if "ext_ior" in props else "air", PLUGIN,
+                                 "ext_ior")
+        # divided in float32, as roughdielectric divides them
+        eta, where = float(np.float32(inside) / np.float32(outside)), "int_ior"
+    if eta == 1.0:
+        raise ParameterError(PLUGIN, where, props[where] if where in props else eta,
+                             "must make the relative index int_ior/ext_ior differ from 1 (an "
+                             "index-matched interface does not scatter)")
+    return eta
 
 
 def _read_ior(props, needed: bool):
@@ -77,10 +144,17 @@ mf, vec = V.terms(microfacet), V.terms(vector)
 GLOSSY = _common.flag("GlossyReflection")
 DIFFUSE = _common.flag("DiffuseReflection")
 GLOSSY_FLAGS = _common.flag("GlossyReflection", "FrontSide")
+ANISOTROPIC = _common.flag("Anisotropic")
+GLOSSY_T = _common.flag("GlossyTransmission")
+REFLECTION_FLAGS = _common.flag("GlossyReflection", "FrontSide", "BackSide")
+TRANSMISSION_FLAGS = _common.flag("GlossyTransmission", "FrontSide", "BackSide", "NonSymmetric")
+RADIANCE = mi.TransportMode.Radiance
+AD = dr.is_diff_v(mi.Float)
 DIFFUSE_FLAGS = _common.flag("DiffuseReflection", "FrontSide")
 DIFFERENTIABLE = mi.ParamFlags.Differentiable
 DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
 ALPHA_MIN_32 = float(np.float32(mf.ALPHA_MIN))  # a texture holding 1e-4 holds it in float32
+fres = V.terms(fresnel)
 FRESNEL_TERMS = {"exact": fresnel.exact, "schlick": fresnel.schlick}  # per spectrum
 FRESNEL_FLOATS = {name: getattr(V.terms(fresnel), name) for name in FRESNEL_TERMS}  # per channel
 
@@ -94,11 +168,13 @@ class CookTorrance(mi.BSDF):
 
     .. pluginparameters::
 
-     * - alpha
+     * - alpha, alpha_u, alpha_v
        - |float| or |texture|
        - Roughness α: for Beckmann the RMS slope of the microfacets, Cook & Torrance's *m*
          (the same quantity as ``roughconductor``'s ``alpha``), finite and ≥ 0; values below
-         10⁻⁴ are clamped to 10⁻⁴, as Mitsuba does (Default: 0.1)
+         10⁻⁴ are clamped to 10⁻⁴, as Mitsuba does. ``alpha_u`` and ``alpha_v`` (both, and
+         not with ``alpha``) make it anisotropic: α along the tangent and the bitangent of the
+         surface (Default: ``alpha`` = 0.1)
        - |exposed|, |differentiable|, |discontinuous|
 
      * - distribution
@@ -150,6 +226,22 @@ class CookTorrance(mi.BSDF):
        - Sample the visible microfacet normals of the chosen ``shadowing`` (Heitz & d'Eon
          2014) instead of D(m)·cosθm (Walter et al. 2007) (Default: |true|)
 
+     * - transmission
+       - |bool|
+       - Add the refraction lobe of Walter et al. 2007: a rough dielectric interface, lit
+         from either side (Default: |false|: reflection only, and no cost for refraction)
+
+     * - int_ior, ext_ior
+       - |float| or |string|
+       - With ``transmission``: the interior and exterior index of refraction, numbers or
+         the names ``dielectric`` takes (``bk7``, ``water``, ``air``, ...); ``eta`` instead
+         gives their ratio (Default: ``bk7``, ``air``)
+
+     * - specular_transmittance
+       - |spectrum| or |texture|
+       - With ``transmission``: factor on the refraction lobe, within [0, 1] (Default: 1.0)
+       - |exposed|, |differentiable|
+
     The model of the lectures, in Walter et al.'s normalisation:
 
     .. math::
@@ -181,6 +273,37 @@ class CookTorrance(mi.BSDF):
     ``conductor`` defaulted to copper. ``roughconductor``'s own default (η = 0, k = 1) is a
     100 % mirror, i.e. F ≡ 1: ask for that with ``fresnel`` = ``none``.
 
+    **Anisotropy.** With ``alpha_u`` ≠ ``alpha_v`` the microfacet slopes are stretched by
+    αu along the surface's tangent (the local x axis, ``dp_du``) and αv along its bitangent:
+    D(h) = exp(−(hx²/αu² + hy²/αv²)/hz²)/(π αu αv hz⁴) for Beckmann, and Smith's Λ takes α
+    projected on the azimuth of its direction (Heitz 2014, "Understanding the
+    Masking-Shadowing Function"). A brushed metal is rough across the brushing direction:
+    the highlight stretches along the axis with the larger α.
+
+    **Transmission** (``transmission`` = |true|; Walter et al. 2007, the model of
+    ``roughdielectric``). η = int_ior/ext_ior is a number (refraction bends every wavelength
+    alike); from inside, the relative index is 1/η. For ωo on the other side of the surface,
+    with η the relative index in the direction of travel, the generalised half vector
+    h = ±(ωi + η ωo)/‖ωi + η ωo‖ (turned to the normal's side) gives the refraction lobe
+
+    .. math::
+
+        f_t = k_t\,\frac{|\omega_i\cdot h|\,|\omega_o\cdot h|}{|\cos\theta_i|\,
+              |\cos\theta_o|}\,\frac{\eta^2\,(1 - F)\,D\,G}
+              {(\omega_i\cdot h + \eta\,\omega_o\cdot h)^2}\cdot\frac{1}{\eta^2}
+
+    where the last factor, 1/η², applies in radiance transport only (Veach 1997, §5.2: the
+    radiance of refracted light scales with the squared index; importance does not), and
+    the reflection lobe is the model above with the dielectric F, on both sides. F is the
+    exact dielectric Fresnel term with total internal reflection. Sampling draws h (visible
+    normals of ωi turned to the normal's side, or D·cosθh with Walter's widened α), then
+    reflects with probability F and refracts otherwise; the pdf carries F or 1 − F and the
+    Jacobian η² |ωo·h| / (ωi·h + η ωo·h)² (Walter eq. 17). ``shadowing`` must be ``smith``
+    (its default then): Smith's Λ is defined on both sides of the surface, whereas the
+    V-cavity masking of Cook & Torrance 1982 is derived for light above the surface, and
+    the joint masking of a refracted pair of directions is not given there. ``fresnel``
+    must be ``exact``; ``material``, a ``k`` ≠ 0 and the diffuse base are rejected.
+
     **Limits.** α is clamped to ≥ 10⁻⁴. The microfacet normals are sampled without the
     float32 collapse of the textbook formula (see :func:`mi_brdfs.scattering.microfacet.
     sample_ndf`), but below α ≈ 10⁻³ the lobe is narrower than a χ² histogram resolves:
@@ -204,48 +327,81 @@ class CookTorrance(mi.BSDF):
 
     def __init__(self, props):
         super().__init__(props)
-        for name in ("alpha_u", "alpha_v"):
-            _common.reject(props, PLUGIN, name, "cooktorrance is isotropic: give alpha")
-        #: Roughness α (Beckmann: RMS slope).
-        self.m_alpha = _common.texture(props, PLUGIN, "alpha", 0.1, lo=0.0, hi=math.inf)
-        low = _common.texture_range(self.m_alpha)
-        if low is not None and low[0] < ALPHA_MIN_32:
-            _common.warn(PLUGIN, f"alpha = {low[0]:g} is clamped to {mf.ALPHA_MIN:g}, as in "
-                                 f"Mitsuba's microfacet models")
+        #: Roughness α (Beckmann: RMS slope) along the tangent and the bitangent: the same
+        #: texture when isotropic.
+        self.m_alpha_u, self.m_alpha_v = _read_alpha(props)
+        self.m_anisotropic = self.m_alpha_u is not self.m_alpha_v
         #: 'beckmann' or 'ggx'.
         self.m_distribution = _common.choice(props, PLUGIN, "distribution", "beckmann",
                                              mf.DISTRIBUTIONS)
+        #: Whether the refraction lobe is there (a rough dielectric interface).
+        self.m_transmission = _common.boolean(props, PLUGIN, "transmission", False)
         #: 'vcavity' or 'smith'.
-        self.m_shadowing = _common.choice(props, PLUGIN, "shadowing", "vcavity", SHADOWING)
+        self.m_shadowing = _common.choice(props, PLUGIN, "shadowing",
+                                          "smith" if self.m_transmission else "vcavity",
+                                          SHADOWING)
         #: 'exact', 'schlick' or 'none'.
         self.m_fresnel = _common.choice(props, PLUGIN, "fresnel", "exact", FRESNEL)
-        #: Relative IOR η + ik, and the material it came from (None: given as eta, k).
-        self.m_eta, self.m_k, self.m_material = _read_ior(props, self.m_fresnel != "none")
+        if self.m_transmission:
+            self._check_transmission(props)
+            #: The relative index int_ior/ext_ior (a Float: refraction bends all wavelengths
+            #: alike); m_k and m_material are None.
+            self.m_eta, self.m_k, self.m_material = mi.Float(_read_dielectric(props)), None, None
+        else:
+            for name in ("specular_transmittance", "int_ior", "ext_ior"):
+                _common.reject(props, PLUGIN, name, "is a parameter of the refraction lobe: "
+                                                    "give transmission = true as well")
+            #: Relative IOR η + ik, and the material it came from (None: given as eta, k).
+            self.m_eta, self.m_k, self.m_material = _read_ior(props, self.m_fresnel != "none")
         if self.m_fresnel == "none" and self.m_eta is not None:
             _common.warn(PLUGIN, "fresnel = none: eta and k (or the material) are not used")
-        #: Factor on the microfacet lobe.
+        #: Factor on the microfacet (reflection) lobe.
         self.m_specular_reflectance = _common.reflectance(props, PLUGIN,
                                                           "specular_reflectance", 1.0)
+        #: Factor on the refraction lobe; None without transmission.
+        self.m_specular_transmittance = _common.reflectance(
+            props, PLUGIN, "specular_transmittance", 1.0) if self.m_transmission else None
         #: Albedo of the Lambertian base; None when it is the constant 0 (no lobe).
-        diffuse = _common.reflectance(props, PLUGIN, "diffuse_reflectance", 0.0)
-        self.m_diffuse_reflectance = None if _common.is_zero(diffuse) else diffuse
+        diffuse = _common.reflectance(props, PLUGIN, "diffuse_reflectance", 0.0) \
+            if not self.m_transmission else None
+        self.m_diffuse_reflectance = None if diffuse is None or _common.is_zero(diffuse) \
+            else diffuse
         #: Sample visible normals (else D·cosθ).
         self.m_sample_visible = _common.boolean(props, PLUGIN, "sample_visible", True)
         #: F on spectra, and on the per-channel floats of _channels (None for 'none')
         self._fresnel_term = FRESNEL_TERMS.get(self.m_fresnel)
         self._fresnel_floats = FRESNEL_FLOATS.get(self.m_fresnel)
         self.parameters_changed()
+        aniso = ANISOTROPIC if self.m_anisotropic else 0
+        if self.m_transmission:  # as roughdielectric: reflection 0, transmission 1, both sides
+            self.m_components = [REFLECTION_FLAGS | aniso, TRANSMISSION_FLAGS | aniso]
+            self.m_flags = REFLECTION_FLAGS | TRANSMISSION_FLAGS | aniso
+            return
         # Lobe 0 is the microfacet lobe (as roughconductor's only one), lobe 1 the diffuse.
-        components = [GLOSSY_FLAGS]
+        components = [GLOSSY_FLAGS | aniso]
         if self.m_diffuse_reflectance is not None:
             components.append(DIFFUSE_FLAGS)
         self.m_components = components  # a copy crosses to C++: assign, don't append
-        self.m_flags = GLOSSY_FLAGS | (DIFFUSE_FLAGS if len(components) > 1 else 0)
+        self.m_flags = components[0] | (DIFFUSE_FLAGS if len(components) > 1 else 0)
+
+    def _check_transmission(self, props):
+        """The switches that ``transmission`` does not combine with, each one line."""
+        if self.m_shadowing != "smith":
+            raise ParameterError(PLUGIN, "shadowing", self.m_shadowing,
+                                 "must be \"smith\" with transmission = true: the V-cavity "
+                                 "masking (Cook & Torrance 1982) is derived for light above the "
+                                 "surface, and gives no masking for a refracted pair")
+        if self.m_fresnel != "exact":
+            raise ParameterError(PLUGIN, "fresnel", self.m_fresnel,
+                                 "must be \"exact\" with transmission = true (the refracted "
+                                 "fraction is 1 − F, with total internal reflection)")
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         bs, sample2 = V.new_sample(), V.point2(sample2)
         lobes = use_mf, use_diffuse = self._lobes(ctx)
         wi = si.wi
+        if self.m_transmission:
+            return self._sample_dielectric(ctx, si, wi, sample1, sample2, active, bs, lobes)
         active = active & (wi.z > 0)  # one-sided: the local frame's z is cosθ
         if V.none(active) or not (use_mf or use_diffuse):
             return bs, Spectrum(0.0)
@@ -294,6 +450,10 @@ class CookTorrance(mi.BSDF):
         lobes = self._lobes(ctx)
         if not (lobes[0] or lobes[1]):
             return Spectrum(0.0), Float(0.0)
+        if self.m_transmission:
+            value, pdf = self._dielectric(si, si.wi, V.vector(wo), active, lobes,
+                                          ctx.mode == RADIANCE)
+            return V.depolarize(value), pdf
         return self._eval_pdf(si, si.wi, V.vector(wo), active, lobes)
 
     def _eval_pdf(self, si, wi, wo, active, lobes, p_microfacet=None):
@@ -359,6 +519,137 @@ class CookTorrance(mi.BSDF):
         value = self._specular(si, cos_im, factor, active)
         return V.select(active, value, 0.0), V.select(active, pdf, 0.0)
 
+    def _sample_dielectric(self, ctx, si, wi, sample1, sample2, active, bs, lobes):
+        """:meth:`sample` with transmission: a microfacet normal, then reflection with
+        probability F, else refraction (Walter et al. 2007, §5.3)."""
+        has_r, has_t = lobes
+        cos_i = wi.z
+        active = active & (cos_i != 0.0)
+        if V.none(active) or not (has_r or has_t):
+            return bs, Spectrum(0.0)
+        # the microfacet normal, seen from ωi turned to the normal's side
+        up = V.select(cos_i < 0.0, -1.0, 1.0)
+        m = self._sample_normal(si, mi.Vector3f(wi.x * up, wi.y * up, wi.z * up), active,
+                                sample2, sample1, widen=True)
+        cos_im = vec.dot(wi, m)
+        # a normal drawn from D·cos may face away from ωi: no sample (as G1(ωi) = 0 there)
+        active = active & (cos_im * cos_i > 0.0)
+        F, cos_t, eta_it, eta_ti = fres.dielectric(cos_im, self._eta)
+        # the lobe: reflect with probability F when both are enabled
+        pick_r = (sample1 <= F) if (has_r and has_t) else has_r
+
+        def reflected():
+            return vec.reflect(wi, m)
+
+        def refracted():
+            return vec.refract(wi, m, cos_t, eta_ti)
+
+        bs.wo = V.choose(pick_r, reflected, refracted)
+        bs.eta = V.select(pick_r, Float(1.0), eta_it)
+        bs.sampled_component = V.select(pick_r, UInt32(0), UInt32(1))
+        bs.sampled_type = V.select(pick_r, UInt32(GLOSSY), UInt32(GLOSSY_T))
+        # the terms at bs.wo as stored, so that bs.pdf = pdf(bs.wo); a reflection that left
+        # below the surface (or a refraction above it) is no sample, nor is a refraction that
+        # float32 cannot represent (for η ≳ 100 at grazing facets, Snell's vector form loses
+        # the unit length to cancellation)
+        wo = bs.wo
+        same_side = cos_i * wo.z > 0.0
+        unit = dr.abs(vec.dot(wo, wo) - 1.0) < 1e-3
+        active = active & V.select(pick_r, same_side, (cos_i * wo.z < 0.0) & unit)
+        weight, bs.pdf = self._dielectric(si, wi, wo, active, lobes, ctx.mode == RADIANCE,
+                                          weight=True)
+        return bs, V.select(active, V.depolarize(weight), 0.0)
+
+    def _dielectric(self, si, wi, wo, active, lobes, radiance, weight=False):
+        """
+        (f·|cosθo|, pdf) of the rough dielectric (transmission), both sides, both lobes; with
+        ``weight`` (for :meth:`sample`) (f·|cosθo|/pdf, pdf) in closed form: k·F̂·G1(ωo) with
+        visible normals, k·F̂·(D/D_widened)·G·|ωo·h|/(|cosθi| cosθh) with D·cos (|ωi·h| for a refraction), where k is the
+        lobe's factor (and 1/η² for radiance through refraction) and F̂ is 1 when both lobes
+        are sampled, else F or 1 − F.
+        """
+        has_r, has_t = lobes
+        cos_i, cos_o = wi.z, wo.z
+        reflect = cos_i * cos_o > 0.0
+        if not has_t:
+            active = active & reflect
+        elif not has_r:
+            active = active & (cos_i * cos_o < 0.0)
+        # the relative index in the direction of travel, and the generalised half vector
+        eta = V.select(cos_i > 0.0, self._eta, self._inv_eta)
+        m = vec.generalized_half_vector(wi, wo, V.select(reflect, 1.0, eta))
+        cos_im, cos_om = vec.dot(wi, m), vec.dot(wo, m)
+        # each direction sees the front of the facet from its own side of the surface
+        active = active & (cos_i != 0.0) & (cos_im * cos_i > 0.0) & (cos_om * cos_o > 0.0)
+        if V.none(active):
+            return Spectrum(0.0), Float(0.0)
+        kind, alpha = self.m_distribution, self._alpha(si, active)
+        D = mf.ndf(kind, alpha, m)
+        F = fres.dielectric(cos_im, self._eta)[0]
+        g1_wi = mf.smith_g1_mitsuba(kind, alpha, wi, m, cos_im)
+        g1_wo = mf.smith_g1_mitsuba(kind, alpha, wo, m, cos_om)
+        lobe_f = V.select(reflect, F, 1.0 - F)
+        # the density of the normal (visible normals of the turned ωi, or the widened D·cos),
+        # the lobe's probability, and the Jacobian of ωo
+        abs_cos_i = dr.abs(cos_i)
+        if self.m_sample_visible:
+            pdf = D * g1_wi * dr.abs(cos_im) / abs_cos_i
+        else:
+            d_sample = mf.ndf(kind, self._widened(alpha, cos_i), m)
+            pdf = mf.pdf_ndf(d_sample, m)
+        if has_r and has_t:
+            pdf = pdf * lobe_f
+        jacobian = V.select(reflect, 1.0 / dr.maximum(4.0 * dr.abs(cos_om), 1e-30),
+                            mf.refraction_jacobian(wi, wo, m, eta))
+        pdf = pdf * jacobian
+        # the lobe's factor: ks, or kt (and 1/η² for radiance: Veach 1997, §5.2)
+        factor = self._lobe_factor(si, reflect, eta, radiance, active)
+        if weight:
+            chosen = self._chosen(lobe_f) if (has_r and has_t) else lobe_f
+            if self.m_sample_visible:
+                shape = g1_wo
+            else:
+                # |ωo·h| = |ωi·h| for a reflection, up to rounding: the one eval/pdf has
+                cos_h = dr.abs(V.select(reflect, cos_om, cos_im))
+                shape = (D / dr.maximum(d_sample, 1e-30)) * g1_wi * g1_wo * cos_h / \
+                    dr.maximum(abs_cos_i * m.z, 1e-30)
+            value = factor * (chosen * shape)
+            active = active & (pdf > 0.0)
+        else:
+            G = g1_wi * g1_wo
+            reflected = F * D * G / (4.0 * abs_cos_i)
+            denom = cos_im + eta * cos_om
+            refracted = dr.abs((1.0 - F) * D * G * eta * eta * cos_im * cos_om /
+                               dr.maximum(cos_i * dr.square(denom), -1e30))
+            value = factor * V.select(reflect, reflected, refracted)
+        return V.select(active, value, 0.0), V.select(active, pdf, 0.0)
+
+    @staticmethod
+    def _chosen(probability):
+        """The weight factor of a lobe chosen with ``probability`` (F or 1 − F): 1, whose
+        derivative in AD variants is that of log(probability), the lobe choice being made on
+        detached values (as roughdielectric, so that gradients through sample() stay
+        unbiased)."""
+        if not AD:
+            return 1.0
+        return dr.replace_grad(Float(1.0), probability / dr.detach(probability))
+
+    def _lobe_factor(self, si, reflect, eta, radiance, active):
+        """ks for a reflection, kt (over η² in radiance transport) for a refraction."""
+        def reflection():
+            return self.m_specular_reflectance.eval(si, active)
+
+        def refraction():
+            kt = self.m_specular_transmittance.eval(si, active)
+            return kt / dr.square(eta) if radiance else kt
+
+        return V.choose(reflect, reflection, refraction)
+
+    def _widened(self, alpha, cos_i):
+        """α widened for D·cos sampling through a dielectric (mf.walter_widening)."""
+        k = mf.walter_widening(cos_i)
+        return (alpha[0] * k, alpha[1] * k) if type(alpha) is tuple else alpha * k
+
     def _specular(self, si, cos_theta, factor, active):
         """ks·F(cosθ)·factor per channel, F at the cosine between ωi and the facet normal."""
         term = self._fresnel_term
@@ -380,40 +671,56 @@ class CookTorrance(mi.BSDF):
         w_d = dr.mean(self.m_diffuse_reflectance.eval(si, active))
         return mixture.probability(w_mf, w_d, 1.0)
 
-    def _sample_normal(self, si, wi, active, sample2, u_facet):
-        """A microfacet normal: D·cosθ, Smith's visible normals of ωi, or the V-cavity's
-        (whose facet of the V-groove ``u_facet`` picks)."""
+    def _sample_normal(self, si, wi, active, sample2, u_facet, widen=False):
+        """A microfacet normal: D·cosθ (with ``widen``, of the widened α of a dielectric),
+        Smith's visible normals of ωi, or the V-cavity's (whose facet of the V-groove
+        ``u_facet`` picks)."""
         kind, alpha = self.m_distribution, self._alpha(si, active)
         if not self.m_sample_visible:
-            return mf.sample_ndf(kind, alpha, sample2)
+            return mf.sample_ndf(kind, self._widened(alpha, wi.z) if widen else alpha, sample2)
         if self.m_shadowing == "smith":
             return mf.sample_visible(kind, alpha, wi, sample2, self._distr)
         return mf.sample_vcavity_visible(kind, alpha, wi, sample2, u_facet)
 
     def _lobes(self, ctx):
-        """Which lobes the context enables: (microfacet, diffuse)."""
+        """Which lobes the context enables: (microfacet, diffuse), or with transmission
+        (reflection, refraction)."""
+        if self.m_transmission:
+            return ctx.is_enabled(GLOSSY, 0), ctx.is_enabled(GLOSSY_T, 1)
         return (ctx.is_enabled(GLOSSY, 0),
                 self.m_diffuse_reflectance is not None and ctx.is_enabled(DIFFUSE, 1))
 
     def _alpha(self, si, active):
-        """α at ``si``, clamped to mf.ALPHA_MIN as Mitsuba clamps it."""
+        """α at ``si`` (the pair (αu, αv) when anisotropic), clamped to mf.ALPHA_MIN as
+        Mitsuba clamps it."""
         if self._alpha_const is not None:
             return self._alpha_const
-        return dr.maximum(self.m_alpha.eval_1(si, active), mf.ALPHA_MIN)
+        alpha_u = dr.maximum(self.m_alpha_u.eval_1(si, active), mf.ALPHA_MIN)
+        if not self.m_anisotropic:
+            return alpha_u
+        return alpha_u, dr.maximum(self.m_alpha_v.eval_1(si, active), mf.ALPHA_MIN)
 
     def eval_diffuse_reflectance(self, si, active=True):
         # The default, eval(wo = n)·π, would count the glossy lobe
         # (https://github.com/mitsuba-renderer/mitsuba3/pull/1896).
-        if self.m_diffuse_reflectance is None:
+        if self.m_diffuse_reflectance is None:  # (also with transmission: no diffuse base)
             return Spectrum(0.0)
         return self.m_diffuse_reflectance.eval(si, active)
 
     def traverse(self, cb):
-        cb.put("alpha", self.m_alpha, DISCONTINUOUS)
-        if self._fresnel_term is not None:
+        if self.m_anisotropic:
+            cb.put("alpha_u", self.m_alpha_u, DISCONTINUOUS)
+            cb.put("alpha_v", self.m_alpha_v, DISCONTINUOUS)
+        else:
+            cb.put("alpha", self.m_alpha_u, DISCONTINUOUS)
+        if self.m_transmission:
+            cb.put("eta", self.m_eta, DISCONTINUOUS)
+        elif self._fresnel_term is not None:
             cb.put("eta", self.m_eta, DISCONTINUOUS)
             cb.put("k", self.m_k, DISCONTINUOUS)
         cb.put("specular_reflectance", self.m_specular_reflectance, DIFFERENTIABLE)
+        if self.m_specular_transmittance is not None:
+            cb.put("specular_transmittance", self.m_specular_transmittance, DIFFERENTIABLE)
         if self.m_diffuse_reflectance is not None:
             cb.put("diffuse_reflectance", self.m_diffuse_reflectance, DIFFERENTIABLE)
 
@@ -421,13 +728,21 @@ class CookTorrance(mi.BSDF):
         """In scalar variants, read constant parameters once: α (and Mitsuba's sampler for it),
         and in RGB ks, η and k as per-channel floats (see _common.variant_tools)."""
         self._alpha_const = self._distr = self._channels = None
+        if self.m_transmission:  # the relative index both ways (opaque: updates reuse kernels)
+            self._eta, self._inv_eta = self.m_eta, dr.rcp(self.m_eta)
+            if V.jit:
+                dr.make_opaque(self._eta, self._inv_eta)
+            else:
+                self._eta, self._inv_eta = float(self._eta), float(self._inv_eta)
         if V.jit:
             return
         si = mi.SurfaceInteraction3f()
-        if not self.m_alpha.is_spatially_varying():
-            self._alpha_const = max(float(self.m_alpha.eval_1(si)), mf.ALPHA_MIN)
+        alphas = (self.m_alpha_u, self.m_alpha_v) if self.m_anisotropic else (self.m_alpha_u,)
+        if not any(tex.is_spatially_varying() for tex in alphas):
+            const = tuple(max(float(tex.eval_1(si)), mf.ALPHA_MIN) for tex in alphas)
+            self._alpha_const = const if self.m_anisotropic else const[0]
             self._distr = mf.distribution(self.m_distribution, self._alpha_const)
-        if V.per_channel:
+        if V.per_channel and not self.m_transmission:
             fresnel_on = self._fresnel_term is not None
             channels = [_common.constant_channels(t) if t is not None else [0.0, 0.0, 0.0]
                         for t in (self.m_specular_reflectance,
@@ -437,12 +752,20 @@ class CookTorrance(mi.BSDF):
                 self._channels = list(zip(*channels))
 
     def to_string(self):
-        if self.m_material is not None:
+        if self.m_transmission:
+            ior = (f"  transmission = true,\n  eta = {float(dr.slice(self.m_eta)):g},\n"
+                   f"  specular_transmittance = {_common.indent(self.m_specular_transmittance)},\n")
+        elif self.m_material is not None:
             ior = f"  material = {self.m_material},\n"
         elif self.m_eta is not None:
             ior = f"  eta = {_common.indent(self.m_eta)},\n  k = {_common.indent(self.m_k)},\n"
         else:
             ior = ""
+        if self.m_anisotropic:
+            alpha = (f"  alpha_u = {_common.indent(self.m_alpha_u)},\n"
+                     f"  alpha_v = {_common.indent(self.m_alpha_v)},\n")
+        else:
+            alpha = f"  alpha = {_common.indent(self.m_alpha_u)},\n"
         diffuse = _common.indent(self.m_diffuse_reflectance) \
             if self.m_diffuse_reflectance is not None else "0 (no diffuse lobe)"
         return (f"CookTorrance[\n"
@@ -450,7 +773,7 @@ class CookTorrance(mi.BSDF):
                 f"  shadowing = {self.m_shadowing},\n"
                 f"  fresnel = {self.m_fresnel},\n"
                 f"  sample_visible = {str(self.m_sample_visible).lower()},\n"
-                f"  alpha = {_common.indent(self.m_alpha)},\n"
+                f"{alpha}"
                 f"{ior}"
                 f"  specular_reflectance = {_common.indent(self.m_specular_reflectance)},\n"
                 f"  diffuse_reflectance = {diffuse}\n"

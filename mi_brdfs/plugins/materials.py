@@ -58,3 +58,47 @@ def conductor_ior(name: str, si=None):
     si = si if si is not None else mi.SurfaceInteraction3f()
     return tuple(np.array(mi.unpolarized_spectrum(t.eval(si)), dtype=np.float64).ravel()
                  for t in (eta, k))
+
+
+#: The dielectrics Mitsuba's ``dielectric`` and ``roughdielectric`` name for ``int_ior`` and
+#: ``ext_ior`` (Mitsuba's ``ior.h``: values from Hecht, "Optics", at about 589 nm); their
+#: values are read from Mitsuba itself by :func:`dielectric_ior`.
+DIELECTRIC_NAMES = ("vacuum", "helium", "hydrogen", "air", "carbon dioxide", "water", "acetone",
+                    "ethanol", "carbon tetrachloride", "glycerol", "benzene", "silicone oil",
+                    "bromine", "water ice", "fused quartz", "pyrex", "acrylic glass",
+                    "polypropylene", "bk7", "sodium chloride", "amber", "pet", "diamond")
+
+_dielectric_cache: dict = {}
+
+
+def dielectric_ior(value, plugin: str = "cooktorrance", name: str = "int_ior") -> float:
+    """
+    An index of refraction given as ``dielectric`` takes ``int_ior``/``ext_ior``: a positive
+    number, or the name of one of :data:`DIELECTRIC_NAMES` (case-insensitive), whose value is
+    the one Mitsuba's own dielectrics use (read from a ``dielectric`` with that ``int_ior``).
+    """
+    if isinstance(value, str):
+        try:  # a number written as a string, as XML's <string> gives it
+            value = float(value)
+        except ValueError:
+            pass
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        value = float(value)
+        if not (value > 0 and value < float("inf")):
+            raise ParameterError(plugin, name, value, "must be a finite number > 0, or the name "
+                                                      "of a dielectric (e.g. bk7, water, air)")
+        return value
+    key = value.lower() if isinstance(value, str) else None
+    if key not in DIELECTRIC_NAMES:
+        raise ParameterError(plugin, name, value, "must be a number > 0 or one of Mitsuba's "
+                                                  "named dielectrics: " + ", ".join(DIELECTRIC_NAMES))
+    if key not in _dielectric_cache:
+        # The value as Mitsuba stores it: the relative index of a smooth dielectric against
+        # vacuum is the bs.eta of a ray it refracts at normal incidence (not mi.traverse, which
+        # must not run while a scene file is being parsed).
+        smooth = mi.load_dict({"type": "dielectric", "int_ior": key, "ext_ior": 1.0})
+        si = mi.SurfaceInteraction3f()
+        si.wi = mi.Vector3f(0.0, 0.0, 1.0)
+        bs, _ = smooth.sample(mi.BSDFContext(), si, 0.999999, mi.Point2f(0.5, 0.5))
+        _dielectric_cache[key] = float(np.asarray(bs.eta).ravel()[0])
+    return _dielectric_cache[key]

@@ -17,12 +17,13 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
-from .cooktorrance import CookTorrance
+from .cooktorrance import CookTorrance, RoughDielectric
 from .lambert import Lambert
 from .phong import Phong
 from .quadrature import hemisphere_albedo
 
-__all__ = ["for_spec", "color", "Lambert", "Phong", "CookTorrance", "hemisphere_albedo"]
+__all__ = ["for_spec", "color", "Lambert", "Phong", "CookTorrance", "RoughDielectric",
+           "hemisphere_albedo"]
 
 
 def color(value, default=None) -> np.ndarray | None:
@@ -65,20 +66,47 @@ def for_spec(spec):
         if rho_d is None or k_s is None or not isinstance(n, (int, float)):
             return None
         return Phong(rho_d, k_s, n, spec.get("form", "normalized"), spec.get("lobe", "mirror"))
+    if kind == "roughdielectric" or (kind == "cooktorrance" and spec.get("transmission")):
+        return _rough_dielectric(spec)
     if kind in ("cooktorrance", "roughconductor"):
         return _cooktorrance(spec)
     return None
+
+
+def _rough_dielectric(spec):
+    """
+    The reference of a ``roughdielectric`` dict or a ``cooktorrance`` one with
+    ``transmission`` (named media take Mitsuba's values); None for textures.
+    """
+    from ..plugins.materials import dielectric_ior
+    alpha = (spec.get("alpha_u"), spec.get("alpha_v")) if "alpha_u" in spec \
+        else spec.get("alpha", 0.1)
+    numbers = alpha if isinstance(alpha, tuple) else (alpha,)
+    if "eta" in spec:
+        eta = spec["eta"]
+    else:
+        eta = dielectric_ior(spec.get("int_ior", "bk7")) / \
+            dielectric_ior(spec.get("ext_ior", "air"), name="ext_ior")
+    specular = color(spec.get("specular_reflectance"), 1.0)
+    transmittance = color(spec.get("specular_transmittance"), 1.0)
+    if not all(isinstance(a, (int, float)) for a in (*numbers, eta)) or specular is None \
+            or transmittance is None:
+        return None
+    return RoughDielectric(alpha, spec.get("distribution", "beckmann"), eta, specular,
+                           transmittance)
 
 
 def _cooktorrance(spec):
     """
     The reference of a ``cooktorrance`` dict, or of a ``roughconductor`` one, which is the same
     model with Smith's G as Mitsuba computes it and the exact Fresnel term (its defaults η = 0,
-    k = 1: F ≡ 1). None for named materials (their spectra are Mitsuba's data), anisotropic or
-    textured roughness.
+    k = 1: F ≡ 1). None for named materials (their spectra are Mitsuba's data) and textured
+    roughness; ``alpha_u``/``alpha_v`` give the anisotropic model.
     """
-    alpha = spec.get("alpha", 0.1)
-    if not isinstance(alpha, (int, float)) or "material" in spec or "alpha_u" in spec:
+    alpha = (spec.get("alpha_u"), spec.get("alpha_v")) if "alpha_u" in spec \
+        else spec.get("alpha", 0.1)
+    numbers = alpha if isinstance(alpha, tuple) else (alpha,)
+    if not all(isinstance(a, (int, float)) for a in numbers) or "material" in spec:
         return None
     params = {"distribution": spec.get("distribution", "beckmann")}
     if spec["type"] == "roughconductor":

@@ -1,5 +1,5 @@
 r"""
-Microfacet terms for isotropic Beckmann and GGX surfaces: the distribution D, Smith's masking
+Microfacet terms for Beckmann and GGX surfaces, isotropic and anisotropic: the distribution D, Smith's masking
 (exactly, and as Mitsuba's ``microfacet.h`` computes it), the V-cavity masking of Cook & Torrance,
 the sampling of microfacet normals (by D·cosθ and by the distribution of visible normals) and
 the densities that go with them.
@@ -28,8 +28,15 @@ and 86). Mitsuba 3 replaces the Beckmann G1 by Walter's rational approximation (
 The V-cavity masking (Cook & Torrance 1982; Heitz 2014 §4.2) is
 G1(v, m) = min(1, 2 (n·m)(n·v) / (v·m)) and G = min(G1(ωi), G1(ωo)).
 
+**Anisotropy.** α may be a pair (αu, αv), the roughness along the local frame's x and y axes
+(the surface's tangent and bitangent). Then tan²θm/α² becomes (mx²/αu² + my²/αv²)/mz², πα²
+becomes π αu αv, and α² tan²θv in Λ becomes ((αu vx)² + (αv vy)²)/vz² (Heitz 2014,
+"Understanding the Masking-Shadowing Function", on anisotropic distributions: the anisotropic
+slope distribution is the isotropic one of unit roughness, stretched by αu and αv). A plain α (a number or ``Float``) is the isotropic case;
+D and Λ compute it with the same operations as the pair (α, α).
+
 All functions take ``kind`` ('beckmann' or 'ggx') as a plain string (configuration, not data)
-and an α already clamped to :data:`ALPHA_MIN`.
+and α already clamped to :data:`ALPHA_MIN`.
 """
 
 from __future__ import annotations
@@ -66,20 +73,22 @@ def mitsuba_type(kind: str):
 
 def ndf(kind: str, alpha, m):
     """D(m), per unit solid angle of microfacet normals; 0 below the horizon."""
+    au, av = alpha if type(alpha) is tuple else (alpha, alpha)
     cos2 = dr.square(m.z)
     # sin²θm/α² from the x, y components: exact near the normal, where 1 - cos²θ cancels
-    slope2 = dr.square(m.x / alpha) + dr.square(m.y / alpha)
+    slope2 = dr.square(m.x / au) + dr.square(m.y / av)
     if kind == BECKMANN:
         d = dr.exp(-slope2 / dr.maximum(cos2, _TINY)) / \
-            dr.maximum(dr.pi * (alpha * alpha) * dr.square(cos2), _TINY)
+            dr.maximum(dr.pi * (au * av) * dr.square(cos2), _TINY)
     else:
-        d = 1.0 / dr.maximum(dr.pi * (alpha * alpha) * dr.square(slope2 + cos2), _TINY)
+        d = 1.0 / dr.maximum(dr.pi * (au * av) * dr.square(slope2 + cos2), _TINY)
     return dr.select(d * m.z > D_COS_MIN, d, 0.0)
 
 
 def _tan2_alpha2(alpha, v):
-    """(α² sin²θv, α² tan²θv) of a unit vector ``v``."""
-    xy = dr.square(alpha * v.x) + dr.square(alpha * v.y)
+    """(α² sin²θv, α² tan²θv) of a unit vector ``v``, with α projected on its azimuth."""
+    au, av = alpha if type(alpha) is tuple else (alpha, alpha)
+    xy = dr.square(au * v.x) + dr.square(av * v.y)
     return xy, xy / dr.maximum(dr.square(v.z), _TINY)
 
 
@@ -148,25 +157,36 @@ def sample_ndf(kind: str, alpha, u):
     """
     A microfacet normal with density D(m) cosθm (:func:`pdf_ndf`) from ``u`` in [0, 1)²
     (Walter eqs. 28 and 35): tan²θm = −α² ln(1 − u₁) (Beckmann) or α² u₁/(1 − u₁) (GGX),
-    φm = 2π u₂.
+    φm = 2π u₂. Anisotropic (α a pair): the slope (cos 2πu₂, sin 2πu₂)·r of unit roughness,
+    r² = −ln(1 − u₁) or u₁/(1 − u₁), is stretched to (αu cos 2πu₂, αv sin 2πu₂)·r (Heitz
+    2014), so φm follows the stretched slope and α² in tan²θm is αu² cos²2πu₂ + αv² sin²2πu₂.
 
     sinθm is taken from tan²θm, not as sqrt(1 − cos²θm): in float32 the latter rounds to 0 for
     α ≲ 1e-3 (cosθm rounds to 1 for 16 % of the samples at α = 1e-3, all at 1e-4), which would
     put every such sample on the mirror direction; tan²θm keeps them apart down to α = 1e-4.
     """
+    sin_phi, cos_phi = dr.sincos(dr.two_pi * u.y)
+    if type(alpha) is tuple:
+        sx, sy = alpha[0] * cos_phi, alpha[1] * sin_phi  # the stretched slope direction
+        a2 = dr.fma(sx, sx, sy * sy)
+        inv = dr.rsqrt(a2)
+        cos_phi, sin_phi = sx * inv, sy * inv
+    else:
+        a2 = alpha * alpha
     if kind == BECKMANN:
-        tan2 = -(alpha * alpha) * dr.log(1.0 - u.x)
+        tan2 = -a2 * dr.log(1.0 - u.x)
     else:  # u₁ < 1, but the floor keeps a scalar variant from dividing by 0 at u₁ = 1
-        tan2 = (alpha * alpha) * u.x / dr.maximum(1.0 - u.x, _TINY)
+        tan2 = a2 * u.x / dr.maximum(1.0 - u.x, _TINY)
     cos_theta = dr.rsqrt(1.0 + tan2)
     sin_theta = dr.sqrt(tan2) * cos_theta
-    sin_phi, cos_phi = dr.sincos(dr.two_pi * u.y)
     return mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta)
 
 
 def distribution(kind: str, alpha):
-    """Mitsuba's ``MicrofacetDistribution`` of ``kind`` and α, with visible-normal sampling."""
-    return mi.MicrofacetDistribution(mitsuba_type(kind), alpha, True)
+    """Mitsuba's ``MicrofacetDistribution`` of ``kind`` and α (or (αu, αv)), with visible-normal
+    sampling."""
+    au, av = alpha if type(alpha) is tuple else (alpha, alpha)
+    return mi.MicrofacetDistribution(mitsuba_type(kind), au, av, True)
 
 
 def sample_visible(kind: str, alpha, wi, u, distr=None):
@@ -227,3 +247,23 @@ def pdf_visible_reflection(d, g1_wi, wi):
 def reflection_jacobian(wo, m):
     """|∂ωm/∂ωo| = 1 / (4 |ωo·m|) of the reflection ωo = reflect(ωi, m) (Walter eq. 14)."""
     return 1.0 / dr.maximum(4.0 * dr.abs(dot(wo, m)), _TINY)
+
+
+def refraction_jacobian(wi, wo, m, eta):
+    """
+    |∂ωm/∂ωo| = η² |ωo·m| / (ωi·m + η ωo·m)² of the refraction of ωi into ωo through the facet
+    m, η the relative index in the direction of travel (Walter et al. 2007, eq. 17).
+    """
+    cos_om = dot(wo, m)
+    denom = dot(wi, m) + eta * cos_om
+    return dr.abs(eta * eta * cos_om) / dr.maximum(dr.square(denom), _TINY)
+
+
+def walter_widening(cos_theta_i):
+    """
+    The factor 1.2 − 0.2 sqrt|cosθi| by which Walter et al. 2007 (§5.3) widen α when they draw
+    microfacet normals from D·cosθm for a rough dielectric, to keep the sample weights of
+    grazing directions small; Mitsuba's ``roughdielectric`` does the same. The density is then
+    that of the widened D: it enters the pdf, and the weight carries D/D_widened.
+    """
+    return 1.2 - 0.2 * dr.sqrt(dr.abs(cos_theta_i))

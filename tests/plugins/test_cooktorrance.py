@@ -437,7 +437,7 @@ def test18_stability(variants_rgb):
                                   r"conductor_names\(\)"),
     ({"material": "Au", "eta": 1.5}, r'"material" = "Au" is invalid: must not be given together '
                                      r'with eta or k'),
-    ({"alpha_u": 0.1}, r'"alpha_u" = 0.1 is invalid: cooktorrance is isotropic: give alpha'),
+    ({"alpha_u": 0.1}, r'"alpha_u" = 0.1 is invalid: needs alpha_v as well'),
     ({"sample_visible": 1}, r'"sample_visible" = 1 is invalid: must be a boolean'),
     ({"specular_reflectance": 2.0}, r'"specular_reflectance" = 2 is invalid'),
 ], ids=["alpha<0", "alpha-nan", "eta<0", "eta0", "eta0-k0", "eta0-channel", "k<0", "k-alone",

@@ -19,7 +19,8 @@ def _cases(rng):
     dirs += [mi.Vector3f(0, 0, 1), mi.Vector3f(1, 0, 0), mi.Vector3f(0.6, 0, -0.8)]
     ups = [d for d in dirs if d.z > 0]
     us = [mi.Point2f(*map(float, u)) for u in rng.random((20, 2))] + [mi.Point2f(0, 0)]
-    kinds_alphas = [(k, a) for k in microfacet.DISTRIBUTIONS for a in (1e-4, 0.2, 1.5)]
+    kinds_alphas = [(k, a) for k in microfacet.DISTRIBUTIONS
+                    for a in (1e-4, 0.2, 1.5, (0.05, 0.5), (1.5, 1e-4))]
     pairs = list(zip(dirs, dirs[::-1]))
     yield "dot", pairs
     yield "half_vector", [(a, b) for a, b in pairs if (a.z + b.z) != 0 or a.x + b.x != 0]
@@ -37,6 +38,15 @@ def _cases(rng):
     yield "pdf_visible", [(0.7, 0.9, w, m) for w, m in zip(ups, ups[::-1])]
     yield "pdf_visible_reflection", [(0.7, 0.9, w) for w in ups]
     yield "reflection_jacobian", list(zip(dirs, ups * 2))
+    yield "refraction_jacobian", [(a, b, m, e) for (a, b), m in zip(pairs, ups * 3)
+                                  for e in (1.5, 1 / 1.5)]
+    yield "walter_widening", [(c,) for c in (0.0, 0.3, -0.7, 1.0)]
+    yield "refract", [(w, m, c, e) for w, m in zip(dirs, ups * 2) for c, e in ((-0.8, 0.66),
+                                                                                (0.3, 1.5))]
+    yield "generalized_half_vector", [(a, b, e) for a, b in pairs for e in (1.0, 1.5, 0.66)
+                                      if a.x + e * b.x != 0 or a.z + e * b.z != 0]
+    yield "dielectric", [(c, e) for c in (-1.0, -0.5, -0.05, 0.0, 0.2, 1.0)
+                         for e in (1.5, 1 / 1.5, 1.0, 1e3)]
     cos = [0.0, 1e-8, 0.3, 0.999, 1.0, -0.1, 1.1]
     iors = [(1.5, 0.0), (0.2, 3.9), (1.0 + 1e-6, 0.0), (0.0, 1.0), (1e3, 1e3)]
     for name in ("exact", "schlick"):
@@ -67,7 +77,8 @@ def test01_compiled_terms_equal_the_terms(variant_scalar_rgb, np_rng):
                                        err_msg=f"{name}{args}")
         seen.add(name)
     # every function a plugin uses is among them
-    assert {"ndf", "smith_g1_mitsuba", "vcavity_g", "exact", "half_vector", "reflect"} <= seen
+    assert {"ndf", "smith_g1_mitsuba", "vcavity_g", "exact", "half_vector", "reflect",
+            "dielectric", "refract", "generalized_half_vector", "refraction_jacobian"} <= seen
 
 
 def test02_no_drjit_call_left(variant_scalar_rgb):
