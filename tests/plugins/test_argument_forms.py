@@ -15,7 +15,16 @@ PLUGINS = [{"type": "lambert"}, {"type": "phong"},
 #: Each of ours with the built-in that computes the same (for the composite BSDFs)
 PAIRS = [({"type": "lambert", "reflectance": 0.6}, {"type": "diffuse", "reflectance": 0.6}),
          ({"type": "cooktorrance", "shadowing": "smith", "material": "Au", "alpha": 0.3},
-          {"type": "roughconductor", "material": "Au", "alpha": 0.3})]
+          {"type": "roughconductor", "material": "Au", "alpha": 0.3}),
+         # upstream's normalmap tests nest an anisotropic GGX aluminium
+         ({"type": "cooktorrance", "shadowing": "smith", "material": "Al", "distribution": "ggx",
+           "alpha_u": 0.4, "alpha_v": 0.1},
+          {"type": "roughconductor", "material": "Al", "distribution": "ggx", "alpha_u": 0.4,
+           "alpha_v": 0.1})]
+IDS = ["lambert", "cooktorrance", "cooktorrance-anisotropic"]
+#: The rough dielectric with its built-in (not in twosided, which takes no transmission)
+GLASS = ({"type": "cooktorrance", "transmission": True, "alpha": 0.3},
+         {"type": "roughdielectric", "alpha": 0.3})
 
 
 def _si(wi=(0, 0, 1)):
@@ -61,7 +70,7 @@ def test02_eval_pdf_along_the_plane(variant_scalar_rgb):
         assert bsdf.eval(ctx, si, wo=wo)[0] == pytest.approx(0.5 * wo[2] / np.pi, abs=1e-7)
 
 
-@pytest.mark.parametrize("pair", PAIRS, ids=["lambert", "cooktorrance"])
+@pytest.mark.parametrize("pair", PAIRS, ids=IDS)
 def test03_inside_twosided(variants_rgb, pair):
     """twosided(ours) = twosided(built-in), on both sides, for eval, pdf and sample."""
     ours, theirs = (mi.load_dict({"type": "twosided", "bsdf": b}) for b in pair)
@@ -77,7 +86,7 @@ def test03_inside_twosided(variants_rgb, pair):
         assert _flat(ours.eval(ctx, si, wo)).max() > 0
 
 
-@pytest.mark.parametrize("pair", PAIRS, ids=["lambert", "cooktorrance"])
+@pytest.mark.parametrize("pair", PAIRS + [GLASS], ids=IDS + ["cooktorrance-transmission"])
 def test04_inside_blendbsdf(variants_rgb, pair):
     """blendbsdf(conductor, ours): the blend of both, all components and each one alone."""
     weight = 0.3
@@ -97,7 +106,7 @@ def test04_inside_blendbsdf(variants_rgb, pair):
     assert np.isfinite(_flat(w)).all() and _flat(w).max() > 0
 
 
-@pytest.mark.parametrize("pair", PAIRS, ids=["lambert", "cooktorrance"])
+@pytest.mark.parametrize("pair", PAIRS + [GLASS], ids=IDS + ["cooktorrance-transmission"])
 def test05_inside_normalmap(variants_rgb, pair):
     """normalmap(ours) = normalmap(built-in) for a tilted normal, and with a normal that ωi sees
     from behind: 0 without flip_invalid_normals, the flipped normal's value with it."""
