@@ -46,7 +46,7 @@ bench: $(STAMP)
 
 # The validation campaign: validation/REPORT.md and validation/figures/ (about 3 min)
 validate: $(STAMP)
-	$(VENV)/bin/mi-brdfs validate --out validation
+	$(VENV)/bin/mi-brdfs validate --out validation --readme README.md
 
 # The README's figures
 figures: $(STAMP)

@@ -181,21 +181,24 @@ def _parser() -> argparse.ArgumentParser:
                     help="figure (default ./compare.png); EXRs beside it")
     cp.set_defaults(func=cmd_compare)
 
-    def report_command(name, summary, description, quick, target):
-        """A subcommand that writes a report into --out."""
+    def report_command(name, summary, description, quick, target, tag):
+        """A subcommand that writes a report into --out (and quotes into --readme)."""
         cmd = sub.add_parser(name, help=summary, description=description)
         cmd.add_argument("--quick", action="store_true", help=quick)
         cmd.add_argument("--out", metavar="DIR", default=".",
                          help=f"report folder (default: the current directory; {target}: "
                               f"validation)")
         cmd.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+        cmd.add_argument("--readme", metavar="FILE",
+                         help=f"also fill in the figures FILE quotes from the run, each marked "
+                              f"<!-- {tag}: KEY -->VALUE<!-- /{tag} --> ({target}: README.md)")
         return cmd
 
     v = report_command("validate", "the validation campaign: REPORT.md with figures",
                        "Run every check on every plugin over its parameter grid, the "
                        "comparisons with Mitsuba's built-ins and the lecture notes' claims, and "
                        "write REPORT.md with its figures.",
-                       "CI-sized: fewer samples and parameters", "make validate")
+                       "CI-sized: fewer samples and parameters", "make validate", "report")
     v.set_defaults(func=cmd_validate)
 
     b = report_command("bench", "speed vs accuracy: SPEED_ACCURACY.md with plots",
@@ -203,10 +206,7 @@ def _parser() -> argparse.ArgumentParser:
                        "of medians of interleaved repeats, error against time) and write "
                        "SPEED_ACCURACY.md with its plots. Run it on a quiet machine; it asserts "
                        "nothing.", "tiny sizes (a smoke run; its timings are not judged)",
-                       "make bench")
-    b.add_argument("--readme", metavar="FILE",
-                   help="also fill in the figures FILE quotes from the run, each marked "
-                        "<!-- bench: KEY -->VALUE<!-- /bench --> (make bench: README.md)")
+                       "make bench", "bench")
     b.set_defaults(func=cmd_bench)
 
     i = sub.add_parser("info", help="versions, variants, LLVM status and registered plugins")
@@ -434,7 +434,7 @@ def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) 
 def cmd_validate(args) -> int:
     from .campaign import sections
 
-    return 1 if _run_report(args, sections(), "checks") else 0
+    return 1 if _run_report(args, sections(), "checks", quotes="report") else 0
 
 
 def cmd_bench(args) -> int:

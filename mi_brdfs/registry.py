@@ -28,6 +28,8 @@ PLUGINS = {
     "lambert": ("mi_brdfs.plugins.lambert", "Lambert"),
     "phong": ("mi_brdfs.plugins.phong", "Phong"),
     "cooktorrance": ("mi_brdfs.plugins.cooktorrance", "CookTorrance"),
+    "ward": ("mi_brdfs.plugins.ward", "Ward"),
+    "orennayar": ("mi_brdfs.plugins.orennayar", "OrenNayar"),
 }
 
 # variant -> {plugin id -> class}

@@ -271,8 +271,12 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
                 remaining_s = schedule.pass_times[0] / item[1] * (spp - schedule.issued)
             if time_budget is not None:
                 remaining_s = min(remaining_s, time_budget - schedule.pass_times[0])
-            # worth it when starting the workers and splitting the rest beats going on alone
-            if workers > 1 and WORKER_START_S + remaining_s / workers < 0.9 * remaining_s:
+            # worth it when starting the workers and splitting the rest beats going on alone;
+            # never from a helper process itself: a script without an ``if __name__ ==
+            # "__main__"`` guard runs again in each spawned helper, which would spawn its own
+            # helpers without end
+            if workers > 1 and WORKER_START_S + remaining_s / workers < 0.9 * remaining_s \
+                    and _is_main_process():
                 arrangement = f"{workers} processes × 1 thread"
                 _render_with_helpers(workers - 1, variant, path, defines, seed, schedule,
                                      run_pass, record)
@@ -366,6 +370,15 @@ def _worker_render(seed: int, spp: int):
     t0 = time.perf_counter()
     image = _render_pass(_worker_scene, seed, spp)
     return image, time.perf_counter() - t0
+
+
+def _is_main_process() -> bool:
+    """
+    Whether this process is no multiprocessing child (a render helper, say). A spawned child
+    gets its name before it re-runs the parent's script, and its parent only after.
+    """
+    import multiprocessing as mp
+    return mp.current_process().name == "MainProcess" and mp.parent_process() is None
 
 
 def _render_with_helpers(helpers, variant, path, defines, seed, schedule, run_pass,

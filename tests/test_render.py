@@ -89,3 +89,25 @@ def test09_time_budget_holds_with_processes(variant_scalar_rgb, processes):
                     defines={"res": "32", "material": "lambert"})
     assert result.spp >= 1 and result.wall_time <= 1.25 * budget, (result.arrangement,
                                                                     result.wall_time)
+
+
+def test10_helpers_never_spawn_helpers(tmp_path):
+    """
+    A script without an ``if __name__ == "__main__"`` guard runs again in every spawned helper
+    process; there ``_is_main_process`` is false, so a render in it does not start helpers of
+    its own (which multiprocessing refuses while the helper starts: the pool would respawn the
+    failing helper without end, and the render would hang).
+    """
+    import subprocess
+    import sys
+    script = tmp_path / "unguarded.py"
+    script.write_text(
+        "import multiprocessing as mp\n"
+        "from mi_brdfs.render import _is_main_process\n"
+        "print('main' if _is_main_process() else 'helper', flush=True)\n"
+        "if mp.current_process().name == 'MainProcess':  # the test's own guard: one child\n"
+        "    with mp.get_context('spawn').Pool(1) as pool:\n"
+        "        pool.apply(abs, (-1,))\n")
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=120, cwd=tmp_path).stdout.split()
+    assert sorted(out) == ["helper", "main"], out

@@ -42,6 +42,14 @@ PAIRS = [
          {"metal": "cooktorrance-smith"}, {"metal": "roughconductor"}),
     Pair("cooktorrance transmission vs roughdielectric", "glass", {"glass": "cooktorrance"},
          {"glass": "roughdielectric"}),
+    # The models Mitsuba 3 lacks, against the built-in a user would otherwise take: Ward of
+    # the same lobe widths as the brushed roughconductor, Oren-Nayar (σ = 0.2) for diffuse.
+    Pair("ward (balanced) vs roughconductor, same widths", "brushed", {"metal": "ward"},
+         {"metal": "roughconductor"}, target=False),
+    Pair("orennayar vs diffuse", "cbox", {"material": "orennayar"}, {"material": "diffuse"},
+         target=False),
+    Pair("orennayar vs lambert", "cbox", {"material": "orennayar"}, {"material": "lambert"},
+         target=False),
     # What the glossy lobe costs: Phong (ρd = 0.8 and its defaults ks = 0.2, n = 30) against
     # lambert (ρ = 0.8), both plugins, in the white furnace; "built-in" is lambert here.
     Pair("phong vs lambert (furnace)", "furnace",

@@ -35,6 +35,14 @@ CHOICES = [
     ("cooktorrance vs roughconductor", {"type": "cooktorrance", "shadowing": "smith",
                                         "material": "Au"},
      {"type": "roughconductor", "material": "Au"}),
+    ("Ward (balanced, αu = 0.05, αv = 0.3) vs roughconductor of the same widths",
+     {"type": "ward", "alpha_u": 0.05, "alpha_v": 0.3, "diffuse_reflectance": 0.0,
+      "specular_reflectance": 0.9},
+     {"type": "roughconductor", "alpha_u": 0.05, "alpha_v": 0.3, "material": "Al"}),
+    ("Ward original vs balanced form", {"type": "ward", "form": "original"}, {"type": "ward"}),
+    ("Oren-Nayar qualitative vs lambert", {"type": "orennayar"}, {"type": "lambert"}),
+    ("Oren-Nayar full vs qualitative", {"type": "orennayar", "form": "full"},
+     {"type": "orennayar"}),
 ]
 
 #: (disabled lobe, A, B): A has the lobe disabled; it must cost what B costs.
@@ -46,6 +54,8 @@ DISABLED = [
      {"type": "phong", "diffuse_reflectance": 0.0, "specular_reflectance": 0.2}),
     ("Cook-Torrance without vs with a diffuse base", {"type": "cooktorrance"},
      {"type": "cooktorrance", "diffuse_reflectance": 0.3}),
+    ("Ward with ρd = 0 vs with a diffuse base", {"type": "ward", "diffuse_reflectance": 0.0},
+     {"type": "ward"}),
 ]
 
 #: A disabled lobe "costs nothing measurable": within this of the configuration without it.

@@ -13,9 +13,11 @@ from .core import Context, Section, run
 
 def sections() -> list:
     """The report's sections, in order."""
-    from . import anisotropy, claims, cooktorrance, extremes, lambert, phong, transmission
+    from . import (anisotropy, claims, cooktorrance, extremes, lambert, orennayar, phong,
+                   transmission, ward)
     return [lambert.section, phong.section, cooktorrance.section, anisotropy.section,
-            transmission.section, claims.section, extremes.section]
+            transmission.section, ward.section, orennayar.section, claims.section,
+            extremes.section]
 
 
 __all__ = ["Context", "Section", "run", "sections"]

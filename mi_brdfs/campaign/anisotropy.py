@@ -87,8 +87,8 @@ def rendered(ctx: Context, s: Section) -> str:
 
 
 def sampling(ctx: Context, s: Section) -> str:
-    thetas = (0.0, 45.0, 85.0)
-    pairs = ((0.04, 0.4), (0.4, 0.04))
+    thetas = ctx.n((0.0, 45.0, 85.0), (85.0,))
+    pairs = ctx.n(((0.04, 0.4), (0.4, 0.04)), ((0.04, 0.4),))
     configs = [(k, sh, v) for k in KINDS for sh, v in (("smith", True), ("vcavity", True),
                                                        ("vcavity", False))]
     tests = len(configs) * len(pairs) * len(thetas)
@@ -104,7 +104,8 @@ def sampling(ctx: Context, s: Section) -> str:
                 worst, fails = min(worst, r.value), fails + (not r.passed)
         sampler = "VNDF" if visible else "D cos"
         s.rows.append(Row(f"cooktorrance {kind} {shadowing}", f"χ², {sampler}, anisotropic "
-                          "(αu, αv) ∈ {(0.04, 0.4), (0.4, 0.04)}, θ ∈ {0°, 45°, 85°}",
+                          f"(αu, αv) ∈ {{{', '.join(map(str, pairs))}}}, θ ∈ "
+                          f"{{{', '.join(f'{t:g}°' for t in thetas)}}}",
                           f"min p = {worst:.3g}", f"Šidák over {tests}", fails == 0))
         rows.append((kind, shadowing, sampler, f"{worst:.3g}"))
     return md_table(["distribution", "masking", "sampling", "smallest χ² p-value"], rows)

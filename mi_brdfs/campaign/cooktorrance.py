@@ -223,7 +223,7 @@ def smooth_limit(ctx: Context, s: Section) -> str:
 
 
 def sampling_grid(ctx: Context, s: Section) -> str:
-    alphas = ctx.n((0.02, 0.1, 0.5, 1.0), (0.1, 1.0))
+    alphas = ctx.n((0.02, 0.1, 0.5, 1.0), (0.1,))
     thetas = (0.0, 84.26)
     configs = [(k, sh, v) for k in KINDS for sh in ("vcavity", "smith") for v in (True, False)]
     tests = len(configs) * len(alphas) * len(thetas) + 2

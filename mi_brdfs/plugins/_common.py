@@ -316,6 +316,36 @@ def reflectance(props, plugin: str, name: str, default: float):
     return texture(props, plugin, name, default, 0.0, 1.0)
 
 
+def roughness(props, plugin: str, default: float = 0.1):
+    """
+    (α_u, α_v) textures from ``alpha`` (the same texture twice) or from ``alpha_u`` and
+    ``alpha_v``, as Mitsuba's ``roughconductor`` reads them: finite and ≥ 0, both or neither
+    of the pair, not together with ``alpha``; warns where a value is below the clamp
+    :data:`mi_brdfs.scattering.microfacet.ALPHA_MIN` of the microfacet terms.
+    """
+    from ..scattering.microfacet import ALPHA_MIN
+    given = [name for name in ("alpha_u", "alpha_v") if name in props]
+    if given:
+        if "alpha" in props:
+            raise ParameterError(plugin, given[0], props[given[0]],
+                                 "must not be given together with alpha (give alpha for an "
+                                 "isotropic surface, alpha_u and alpha_v for an anisotropic one)")
+        if len(given) == 1:
+            other = "alpha_v" if given[0] == "alpha_u" else "alpha_u"
+            raise ParameterError(plugin, given[0], props[given[0]],
+                                 f"needs {other} as well (an anisotropic surface has both)")
+        names = given
+    else:
+        names = ["alpha"]
+    alphas = [texture(props, plugin, name, default, lo=0.0, hi=math.inf) for name in names]
+    for name, tex in zip(names, alphas):
+        low = texture_range(tex)
+        if low is not None and low[0] < float(np.float32(ALPHA_MIN)):  # 1e-4 held in float32
+            warn(plugin, f"{name} = {low[0]:g} is clamped to {ALPHA_MIN:g}, as in Mitsuba's "
+                         f"microfacet models")
+    return alphas[0], alphas[-1]
+
+
 def number(props, plugin: str, name: str, default: float, lo: float = -math.inf,
            hi: float = math.inf, lo_open: bool = False) -> float:
     """A plain number (not a texture), finite and within [``lo``, ``hi``]."""
@@ -360,6 +390,30 @@ def is_zero(tex) -> bool:
     """Whether a texture is the constant 0 (so the lobe it scales can be left out entirely)."""
     rng = texture_range(tex)
     return rng is not None and not tex.is_spatially_varying() and rng[0] == 0.0 == rng[1]
+
+
+def upper_bound(props, name: str, tex) -> list[float] | None:
+    """Per-channel upper bound of a parameter where it is cheap to know, else None."""
+    T = _types()
+    if name in props and props.type(name) in (T.Float, T.Integer):
+        return [float(props[name])]
+    if name in props and props.type(name) == T.Color:
+        return [float(c) for c in props[name]]
+    rng = texture_range(tex)
+    return None if rng is None else [rng[1]]
+
+
+def warn_sum(props, plugin: str, a, b, consequence: str) -> None:
+    """
+    Warn (values kept) where two reflectances, ``a`` and ``b`` as (name, texture), can add up
+    to more than 1 in some channel, saying the ``consequence``.
+    """
+    bounds = [upper_bound(props, name, tex) for name, tex in (a, b)]
+    if bounds[0] is None or bounds[1] is None:
+        return
+    total = float(np.max(np.add(*bounds)))  # per channel; one value stands for every channel
+    if total > 1.0 + 1e-6:  # not for rounding: an <rgb> 0.8 is stored as 0.800000012
+        warn(plugin, f"{a[0]} + {b[0]} reaches {total:g} > 1: {consequence}; values kept")
 
 
 def warn(plugin: str, message: str) -> None:

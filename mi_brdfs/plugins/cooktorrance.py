@@ -37,31 +37,6 @@ def _constant_channels(props, name) -> list[float] | None:
     return None
 
 
-def _read_alpha(props):
-    """(α_u, α_v) from ``alpha`` (the same texture twice) or from ``alpha_u`` and ``alpha_v``,
-    as ``roughconductor`` reads them; warns where a value is below the clamp."""
-    given = [name for name in ("alpha_u", "alpha_v") if name in props]
-    if given:
-        if "alpha" in props:
-            raise ParameterError(PLUGIN, given[0], props[given[0]],
-                                 "must not be given together with alpha (give alpha for an "
-                                 "isotropic surface, alpha_u and alpha_v for an anisotropic one)")
-        if len(given) == 1:
-            other = "alpha_v" if given[0] == "alpha_u" else "alpha_u"
-            raise ParameterError(PLUGIN, given[0], props[given[0]],
-                                 f"needs {other} as well (an anisotropic surface has both)")
-        names = given
-    else:
-        names = ["alpha"]
-    alphas = [_common.texture(props, PLUGIN, name, 0.1, lo=0.0, hi=math.inf) for name in names]
-    for name, tex in zip(names, alphas):
-        low = _common.texture_range(tex)
-        if low is not None and low[0] < ALPHA_MIN_32:
-            _common.warn(PLUGIN, f"{name} = {low[0]:g} is clamped to {mf.ALPHA_MIN:g}, as in "
-                                 f"Mitsuba's microfacet models")
-    return alphas[0], alphas[-1]
-
-
 #: What ``transmission`` excludes, and why (one line each).
 NOT_WITH_TRANSMISSION = {
     "material": "names a conductor; transmission needs a dielectric (give eta, or int_ior and "
@@ -153,7 +128,6 @@ AD = dr.is_diff_v(mi.Float)
 DIFFUSE_FLAGS = _common.flag("DiffuseReflection", "FrontSide")
 DIFFERENTIABLE = mi.ParamFlags.Differentiable
 DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
-ALPHA_MIN_32 = float(np.float32(mf.ALPHA_MIN))  # a texture holding 1e-4 holds it in float32
 fres = V.terms(fresnel)
 FRESNEL_TERMS = {"exact": fresnel.exact, "schlick": fresnel.schlick}  # per spectrum
 FRESNEL_FLOATS = {name: getattr(V.terms(fresnel), name) for name in FRESNEL_TERMS}  # per channel
@@ -329,7 +303,7 @@ class CookTorrance(mi.BSDF):
         super().__init__(props)
         #: Roughness α (Beckmann: RMS slope) along the tangent and the bitangent: the same
         #: texture when isotropic.
-        self.m_alpha_u, self.m_alpha_v = _read_alpha(props)
+        self.m_alpha_u, self.m_alpha_v = _common.roughness(props, PLUGIN)
         self.m_anisotropic = self.m_alpha_u is not self.m_alpha_v
         #: 'beckmann' or 'ggx'.
         self.m_distribution = _common.choice(props, PLUGIN, "distribution", "beckmann",

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
 from ..errors import ParameterError
 from ..scattering import mixture
@@ -41,30 +40,6 @@ def _exponent(props):
                                  "must be a float or a texture")
         return _common.texture(props, PLUGIN, "exponent", 30.0, 0.0, EXPONENT_MAX)
     return _common.number(props, PLUGIN, "exponent", 30.0, 0.0, EXPONENT_MAX)
-
-
-def _upper_bound(props, name: str, tex):
-    """Per-channel upper bound of a reflectance where it is cheap to know, else None."""
-    T = mi.Properties.Type
-    if name in props and props.type(name) in (T.Float, T.Integer):
-        return [float(props[name])]
-    if name in props and props.type(name) == T.Color:
-        return [float(c) for c in props[name]]
-    rng = _common.texture_range(tex)
-    return None if rng is None else [rng[1]]
-
-
-def _warn_energy(props, diffuse, specular) -> None:
-    """ρd + ks > 1 in the normalized form: its albedo at normal incidence is ρd + ks."""
-    d = _upper_bound(props, "diffuse_reflectance", diffuse)
-    s = _upper_bound(props, "specular_reflectance", specular)
-    if d is None or s is None:
-        return
-    total = float(np.max(np.add(d, s)))  # per channel; one value stands for every channel
-    if total > 1.0 + 1e-6:  # not for rounding: an <rgb> 0.8 is stored as 0.800000012
-        _common.warn(PLUGIN, f"diffuse_reflectance + specular_reflectance reaches {total:g} > 1: "
-                             f"the normalized form then reflects more light than it receives "
-                             f"(its albedo at normal incidence is their sum); values kept")
 
 
 V = _common.variant_tools()
@@ -199,7 +174,11 @@ class Phong(mi.BSDF):
         self.m_exponent = (exponent if self._textured_exponent or not V.jit
                            else Float(exponent))
         if self.m_form == "normalized":
-            _warn_energy(props, self.m_diffuse_reflectance, self.m_specular_reflectance)
+            _common.warn_sum(props, PLUGIN,
+                             ("diffuse_reflectance", self.m_diffuse_reflectance),
+                             ("specular_reflectance", self.m_specular_reflectance),
+                             "the normalized form then reflects more light than it receives "
+                             "(its albedo at normal incidence is their sum)")
 
         # Lobes in component order; one whose reflectance is the constant 0 is left out.
         self._diffuse = self._glossy = None  # component indices

@@ -1,8 +1,8 @@
 """
 Float64 NumPy reference implementations of the package's models: the oracle for the tests and
 the validation campaign, written independently of the plugins. The models (``lambert.py``,
-``phong.py``, ``cooktorrance.py``, ``quadrature.py``) use NumPy alone; only :func:`for_spec` and
-:func:`color` here ask Mitsuba which variant is set (RGB colours mean something else in spectral
+``phong.py``, ``cooktorrance.py``, ``ward.py``, ``orennayar.py``, ``quadrature.py``) use NumPy
+alone; only :func:`for_spec` and :func:`color` here ask Mitsuba which variant is set (RGB colours mean something else in spectral
 variants) and parse specs through :mod:`mi_brdfs.bsdfspec`.
 
 Each model is a small class with ``brdf(wi, wo)`` → f (without the cosine), arrays of shape
@@ -19,11 +19,13 @@ import numpy as np
 
 from .cooktorrance import CookTorrance, RoughDielectric
 from .lambert import Lambert
+from .orennayar import OrenNayar
 from .phong import Phong
 from .quadrature import hemisphere_albedo
+from .ward import Ward
 
-__all__ = ["for_spec", "color", "Lambert", "Phong", "CookTorrance", "RoughDielectric",
-           "hemisphere_albedo"]
+__all__ = ["for_spec", "color", "Lambert", "Phong", "CookTorrance", "RoughDielectric", "Ward",
+           "OrenNayar", "hemisphere_albedo"]
 
 
 def color(value, default=None) -> np.ndarray | None:
@@ -66,6 +68,21 @@ def for_spec(spec):
         if rho_d is None or k_s is None or not isinstance(n, (int, float)):
             return None
         return Phong(rho_d, k_s, n, spec.get("form", "normalized"), spec.get("lobe", "mirror"))
+    if kind == "ward":
+        alpha = (spec.get("alpha_u"), spec.get("alpha_v")) if "alpha_u" in spec \
+            else spec.get("alpha", 0.1)
+        rho_d = color(spec.get("diffuse_reflectance"), 0.5)
+        rho_s = color(spec.get("specular_reflectance"), 0.2)
+        numbers = alpha if isinstance(alpha, tuple) else (alpha,)
+        if rho_d is None or rho_s is None or \
+                not all(isinstance(a, (int, float)) for a in numbers):
+            return None
+        return Ward(alpha, rho_d, rho_s, spec.get("form", "balanced"))
+    if kind == "orennayar":
+        rho, sigma = color(spec.get("reflectance"), 0.5), spec.get("sigma", 0.2)
+        if rho is None or not isinstance(sigma, (int, float)):
+            return None
+        return OrenNayar(rho, sigma, spec.get("form", "qualitative"))
     if kind == "roughdielectric" or (kind == "cooktorrance" and spec.get("transmission")):
         return _rough_dielectric(spec)
     if kind in ("cooktorrance", "roughconductor"):

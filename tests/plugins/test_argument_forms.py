@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 PLUGINS = [{"type": "lambert"}, {"type": "phong"},
-           {"type": "cooktorrance", "alpha": 0.3, "diffuse_reflectance": 0.2}]
+           {"type": "cooktorrance", "alpha": 0.3, "diffuse_reflectance": 0.2},
+           {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.3}, {"type": "orennayar", "form": "full"}]
 #: Each of ours with the built-in that computes the same (for the composite BSDFs)
 PAIRS = [({"type": "lambert", "reflectance": 0.6}, {"type": "diffuse", "reflectance": 0.6}),
          ({"type": "cooktorrance", "shadowing": "smith", "material": "Au", "alpha": 0.3},

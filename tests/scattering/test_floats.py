@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from helpers import random_directions
 
-from mi_brdfs.scattering import floats, fresnel, microfacet, vector
+from mi_brdfs.scattering import floats, fresnel, microfacet, orennayar, vector, ward
 
 REWRITTEN = ("select", "maximum", "minimum", "fma", "square")
 
@@ -52,6 +52,14 @@ def _cases(rng):
     for name in ("exact", "schlick"):
         yield name, [(c, e, k) for c in cos for e, k in iors]
     yield "r0", iors
+    alphas = (1e-4, 0.2, 1.5, (0.05, 0.5))
+    yield "specular", [(f, a, w, v) for f in ward.FORMS for a in alphas
+                       for w, v in zip(ups, ups[::-1])]
+    yield "pdf", [(v, m, 0.7) for v, m in zip(ups, ups[::-1])]
+    yield "sample", [(a, u) for a in alphas for u in us]
+    yield "coefficients", [(s,) for s in (0.0, 0.3, 1.5)]
+    yield "factor", [(f, s, w, v, 0.6) for f in orennayar.FORMS for s in (0.0, 0.4, 1.5)
+                     for w, v in zip(ups, ups[::-1])]
 
 
 def _values(x):
@@ -63,7 +71,7 @@ def _values(x):
 def test01_compiled_terms_equal_the_terms(variant_scalar_rgb, np_rng):
     """Every term, compiled for floats, returns the terms' own value on the same floats (to
     float64 rounding: a*b + c where dr.fma rounds once)."""
-    modules = {m: floats.specialise(m) for m in (vector, microfacet, fresnel)}
+    modules = {m: floats.specialise(m) for m in (vector, microfacet, fresnel, ward, orennayar)}
     seen = set()
     for name, cases in _cases(np_rng):
         module = next(m for m in modules if hasattr(m, name) and
@@ -78,13 +86,14 @@ def test01_compiled_terms_equal_the_terms(variant_scalar_rgb, np_rng):
         seen.add(name)
     # every function a plugin uses is among them
     assert {"ndf", "smith_g1_mitsuba", "vcavity_g", "exact", "half_vector", "reflect",
-            "dielectric", "refract", "generalized_half_vector", "refraction_jacobian"} <= seen
+            "dielectric", "refract", "generalized_half_vector", "refraction_jacobian",
+            "specular", "factor"} <= seen
 
 
 def test02_no_drjit_call_left(variant_scalar_rgb):
     """The compiled functions no longer call the rewritten drjit functions, and the terms they
     call from sibling modules (microfacet -> vector.dot) are the compiled ones."""
-    for module in (vector, microfacet, fresnel):
+    for module in (vector, microfacet, fresnel, ward, orennayar):
         compiled = floats.specialise(module)
         for name, fn in vars(compiled).items():
             if callable(fn) and getattr(fn, "__code__", None) and \

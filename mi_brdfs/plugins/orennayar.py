@@ -1,0 +1,182 @@
+"""
+Oren & Nayar's rough diffuse reflectance (1994) in its ``qualitative`` and ``full`` forms,
+sampled by the cosine-weighted hemisphere. The terms live in :mod:`mi_brdfs.scattering.orennayar`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import drjit as dr
+import mitsuba as mi
+
+from ..errors import ParameterError
+from ..scattering import orennayar as terms_module
+from . import _common
+
+PLUGIN = "orennayar"
+
+#: Largest σ accepted: the standard deviation of a facet's slope angle, which lies within
+#: [0, π/2] (the model's coefficients stay finite beyond, but mean nothing there).
+SIGMA_MAX = math.pi / 2
+
+V = _common.variant_tools()
+# Bound once per variant: in scalar variants these are looked up at every call otherwise.
+Spectrum, Float, UInt32 = mi.Spectrum, mi.Float, mi.UInt32
+cosine_hemisphere = mi.warp.square_to_cosine_hemisphere
+cosine_hemisphere_pdf = mi.warp.square_to_cosine_hemisphere_pdf
+terms = V.terms(terms_module)
+DIFFUSE = _common.flag("DiffuseReflection")
+FLAGS = _common.flag("DiffuseReflection", "FrontSide")
+
+
+def _sigma(props):
+    """σ: a number (-> float) or a texture (-> mi.Texture), finite and within [0, π/2]."""
+    T = mi.Properties.Type
+    if "sigma" in props and props.type("sigma") not in (T.Float, T.Integer):
+        if props.type("sigma") != T.Object:
+            raise ParameterError(PLUGIN, "sigma", props["sigma"],
+                                 "must be a float or a texture (radians)")
+        return _common.texture(props, PLUGIN, "sigma", 0.2, 0.0, SIGMA_MAX)
+    return _common.number(props, PLUGIN, "sigma", 0.2, 0.0, SIGMA_MAX)
+
+
+class OrenNayar(mi.BSDF):
+    r"""
+    .. _bsdf-orennayar:
+
+    Oren-Nayar rough diffuse reflectance (:monosp:`orennayar`)
+    ----------------------------------------------------------
+
+    .. pluginparameters::
+
+     * - reflectance
+       - |spectrum| or |texture|
+       - ρ, the albedo of each facet, finite and within [0, 1] (Default: 0.5)
+       - |exposed|, |differentiable|
+
+     * - sigma
+       - |float| or |texture|
+       - σ, the standard deviation of the facets' slope angle in radians, within [0, π/2];
+         0 is Lambert (Default: 0.2)
+       - |exposed| (JIT variants, or as a texture), |differentiable|
+
+     * - form
+       - |string|
+       - ``qualitative`` (the paper's simplified model) or ``full`` (with the
+         interreflection term) (Default: ``qualitative``)
+       -
+
+    With α = max(θi, θo), β = min(θi, θo), Δφ = φi − φo (Oren & Nayar 1994, §4.4):
+
+    .. math::
+
+        f_\text{qualitative} = \frac{\rho}{\pi}\Big(A + B\max(0, \cos\Delta\phi)
+            \sin\alpha\tan\beta\Big), \quad A = 1 - \frac{\sigma^2}{2(\sigma^2 + 0.33)},
+            \quad B = \frac{0.45\,\sigma^2}{\sigma^2 + 0.09}
+
+    and ``full`` adds the paper's C2, C3 terms and the interreflection term
+    0.17 ρ²/π σ²/(σ² + 0.13) (1 − cos Δφ (2β/π)²) (:mod:`mi_brdfs.scattering.orennayar`
+    writes all of them). ``eval`` returns f·cosθo; the model is one-sided and reciprocal.
+    At σ = 0 it is Lambert's ρ/π, computed as ``lambert`` computes it (bit-identical renders
+    in JIT variants).
+
+    **Relation to Mitsuba 0.6's** ``roughdiffuse``: its ``alpha`` is a Beckmann RMS slope,
+    which it converts as σ = α/√2; ``alpha`` = 0.2 there is ``sigma`` = 0.1414 here, and
+    its ``useFastApprox`` = true is ``form`` = ``qualitative``.
+
+    **Sampling.** The cosine-weighted hemisphere, as Mitsuba 0.6: the weight is ρ·factor,
+    at most ρ(A + B) ≤ 1.45 ρ (qualitative), so rough surfaces render with little more noise
+    than Lambert's.
+
+    .. tabs::
+        .. code-tab:: xml
+
+            <bsdf type="orennayar">
+                <rgb name="reflectance" value="0.7, 0.5, 0.3"/>
+                <float name="sigma" value="0.5"/>
+            </bsdf>
+
+        .. code-tab:: python
+
+            {'type': 'orennayar', 'reflectance': {'type': 'rgb', 'value': [0.7, 0.5, 0.3]},
+             'sigma': 0.5}
+    """
+
+    def __init__(self, props):
+        super().__init__(props)
+        #: Facet albedo ρ.
+        self.m_reflectance = _common.reflectance(props, PLUGIN, "reflectance", 0.5)
+        #: σ: a float (a Float in JIT variants, to be updatable) or a texture.
+        sigma = _sigma(props)
+        self._textured_sigma = isinstance(sigma, mi.Texture)
+        self.m_sigma = sigma if self._textured_sigma or not V.jit else Float(sigma)
+        #: ``qualitative`` or ``full``
+        self.m_form = _common.choice(props, PLUGIN, "form", "qualitative", terms_module.FORMS)
+        self.m_flags = FLAGS
+        self.m_components = [FLAGS]
+
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        bs = V.new_sample()
+        active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
+        if V.none(active) or not ctx.is_enabled(DIFFUSE):
+            return bs, Spectrum(0.0)
+        # ωo from the cosine-weighted hemisphere, pdf cosθo/π
+        bs.wo = wo = cosine_hemisphere(V.point2(sample2))
+        bs.pdf = pdf = cosine_hemisphere_pdf(wo)
+        bs.eta = 1.0
+        bs.sampled_type = UInt32(DIFFUSE)
+        bs.sampled_component = UInt32(0)
+        # weight = f·cosθo / pdf = ρ·factor (ρ alone at σ = 0, as lambert)
+        rho = self.m_reflectance.eval(si, active)
+        weight = rho * self._factor(si, si.wi, wo, rho, active)
+        return bs, V.select(active & (pdf > 0), V.depolarize(weight), 0.0)
+
+    def eval(self, ctx, si, wo, active=True):
+        if not ctx.is_enabled(DIFFUSE):
+            return Spectrum(0.0)
+        return self._eval_pdf(si, wo, active)[0]
+
+    def pdf(self, ctx, si, wo, active=True):
+        if not ctx.is_enabled(DIFFUSE):
+            return Float(0.0)
+        return self._eval_pdf(si, wo, active)[1]
+
+    def eval_pdf(self, ctx, si, wo, active=True):
+        if not ctx.is_enabled(DIFFUSE):
+            return Spectrum(0.0), Float(0.0)
+        return self._eval_pdf(si, wo, active)
+
+    def _eval_pdf(self, si, wo, active):
+        """(f·cosθo, pdf) at ``wo``, for eval, pdf and eval_pdf."""
+        wo = V.vector(wo)
+        active = active & (si.wi.z > 0) & (wo.z > 0)  # one-sided, like `diffuse`
+        if V.none(active):
+            return Spectrum(0.0), Float(0.0)
+        # f·cosθo = (ρ/π·cosθo)·factor, in lambert's order of operations
+        rho = self.m_reflectance.eval(si, active)
+        value = rho * dr.inv_pi * wo.z * self._factor(si, si.wi, wo, rho, active)
+        pdf = cosine_hemisphere_pdf(wo)
+        return V.select(active, V.depolarize(value), 0.0), V.select(active, pdf, 0.0)
+
+    def _factor(self, si, wi, wo, rho, active):
+        """f/(ρ/π) at (ωi, ωo): exactly 1 where σ = 0."""
+        sigma = self.m_sigma.eval_1(si, active) if self._textured_sigma else self.m_sigma
+        # values set through mi.traverse are not validated: clamp them into the accepted range
+        sigma = dr.clip(sigma, 0.0, SIGMA_MAX)
+        factor = terms.factor(self.m_form, sigma, wi, wo, rho)
+        # the full form as written goes negative at grazing forward scattering: 0 there
+        return dr.maximum(factor, 0.0) if self.m_form == "full" else factor
+
+    def eval_diffuse_reflectance(self, si, active=True):
+        return self.m_reflectance.eval(si, active)
+
+    def traverse(self, cb):
+        cb.put("reflectance", self.m_reflectance, mi.ParamFlags.Differentiable)
+        if self._textured_sigma or V.jit:  # a Python float cannot be updated
+            cb.put("sigma", self.m_sigma, mi.ParamFlags.Differentiable)
+
+    def to_string(self):
+        return (f"OrenNayar[\n  form = {self.m_form},\n"
+                f"  reflectance = {_common.indent(self.m_reflectance)},\n"
+                f"  sigma = {_common.indent(self.m_sigma)}\n]")

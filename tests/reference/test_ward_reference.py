@@ -1,0 +1,120 @@
+"""
+The float64 Ward and Oren-Nayar references (mi_brdfs.reference.ward, .orennayar): their albedo
+quadratures against closed forms and one-dimensional integrals at normal incidence, against
+brute-force quadrature of their own brdf(), and the convergence the Ward docstring states.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from mi_brdfs.reference import OrenNayar, Ward, hemisphere_albedo
+from mi_brdfs.reference.quadrature import direction, gauss_legendre, sphere_grid
+
+
+def _radial(integrand, alpha, nodes=800):
+    """(2/α²) ∫₀¹ e^(−t²/α²) t g(t) dt, t = tanθh (normal incidence: ωo above iff t < 1)."""
+    x, w = gauss_legendre(nodes)
+    t, w = 0.5 * (x + 1), 0.5 * w
+    return float(np.sum(w * 2 / alpha**2 * np.exp(-t * t / alpha**2) * t * integrand(t)))
+
+
+def _normal_incidence(form, alpha):
+    """E(0) of each form as a one-dimensional integral over t = tanθh (isotropic α): with
+    c² = 1/(1 + t²), cosθo = 2c² − 1; balanced in closed form."""
+    c2 = lambda t: 1 / (1 + t * t)  # noqa: E731
+    if form == "balanced":  # ∫ (1 − t²) = 1 − α² + α² e^(−1/α²)
+        return 1 - alpha**2 + alpha**2 * math.exp(-1 / alpha**2)
+    if form == "duer":
+        return _radial(lambda t: c2(t) ** 2, alpha)
+    return _radial(lambda t: c2(t) ** 2 * np.sqrt(np.maximum(2 * c2(t) - 1, 0)), alpha)
+
+
+@pytest.mark.parametrize("form", ("original", "duer", "balanced"))
+def test01_ward_albedo_at_normal_incidence(form):
+    """The half-vector quadrature equals the closed form (balanced: 1 − α² + α² e^(−1/α²))
+    or the one-dimensional integral, to 1e-6."""
+    for alpha in (0.05, 0.3, 1.0, 2.0):
+        got = Ward(alpha, 0.0, 1.0, form).specular_albedo(0.0)
+        assert got == pytest.approx(_normal_incidence(form, alpha), rel=1e-6), alpha
+
+
+def test02_a_wrong_form_is_caught():
+    """The check above can fail: duer's albedo is not balanced's closed form (0.3: by 6 %)."""
+    got = Ward(0.3, 0.0, 1.0, "duer").specular_albedo(0.0)
+    assert abs(got - _normal_incidence("balanced", 0.3)) > 0.02
+
+
+@pytest.mark.parametrize("form", ("original", "duer", "balanced"))
+def test03_ward_albedo_against_brute_force(form):
+    """Broad anisotropic lobes (which a plain hemisphere grid resolves), at three azimuths:
+    the half-vector quadrature = hemisphere_albedo of brdf() within 2e-4 (the grid's own
+    error at the horizon discontinuity)."""
+    model = Ward((0.2, 0.5), 0.0, 1.0, form)
+    for theta in (0.0, 45.0, 70.0):
+        for phi in (0.0, 0.7, 1.6):
+            wi = direction(math.radians(theta), phi)
+            wo, weights = sphere_grid(768, 768)
+            brute = float(np.sum(weights * wo[:, 2] * model.lobe(np.broadcast_to(wi, wo.shape),
+                                                                   wo)))
+            got = model.specular_albedo(math.radians(theta), phi)
+            assert got == pytest.approx(brute, rel=2e-4, abs=1e-5), (theta, phi)
+
+
+def test04_walters_density_is_a_density():
+    """∫ p dωo over the upper hemisphere at normal incidence = the fraction of half vectors
+    that reflect above it, 1 − e^(−1/α²) (isotropic)."""
+    for alpha in (0.3, 1.0):
+        wo, weights = sphere_grid(1024, 256)
+        wi = np.broadcast_to([0.0, 0.0, 1.0], wo.shape)
+        total = float(np.sum(weights * Ward(alpha).sampling_pdf(wi, wo)))
+        assert total == pytest.approx(1 - math.exp(-1 / alpha**2), rel=1e-5)
+
+
+def test05_ward_quadrature_converges():
+    """Doubling the nodes moves the albedo by ≤ 1e-4 relative (the docstring's bound), at the
+    worst cases: grazing incidence, wide and anisotropic lobes."""
+    for form in ("original", "duer", "balanced"):
+        for alpha, theta in (((0.05, 0.5), 85.0), (1.0, 0.0) if form == "duer" else (0.5, 89.0)):
+            model = Ward(alpha, 0.0, 1.0, form)
+            a = model.specular_albedo(math.radians(theta), 0.6)
+            b = model.specular_albedo(math.radians(theta), 0.6, n_mu=512, n_phi=2048)
+            assert abs(a - b) <= 1e-4 * b, (form, alpha, theta)
+
+
+@pytest.mark.parametrize("form", ("qualitative", "full"))
+def test06_orennayar_closed_forms(form):
+    """σ = 0 is Lambert; at normal incidence E = ρA (+ ρ²C4 for full), and the quadrature
+    gives it to 1e-9; without the interreflection term, full would miss it (the check can
+    fail)."""
+    rng = np.random.default_rng(0)
+    wi, wo = rng.normal(size=(100, 3)), rng.normal(size=(100, 3))
+    wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    np.testing.assert_allclose(OrenNayar(0.6, 0.0, form).brdf(wi, wo), 0.6 / math.pi)
+    for sigma in (0.2, 1.0):
+        s2 = sigma**2
+        a, c4 = 1 - 0.5 * s2 / (s2 + 0.33), 0.17 * s2 / (s2 + 0.13)
+        expected = 0.7 * a + (0.49 * c4 if form == "full" else 0.0)
+        assert float(OrenNayar(0.7, sigma, form).albedo(0.0)[0]) == pytest.approx(expected,
+                                                                                 rel=1e-9)
+        if form == "full":
+            assert abs(expected - 0.7 * a) > 0.01
+
+
+def test07_orennayar_albedo_against_brute_force():
+    """The split quadrature = a plain hemisphere quadrature at 1024² within 1e-5, and the
+    model is reciprocal in float64."""
+    for form in ("qualitative", "full"):
+        model = OrenNayar(0.8, 0.7, form)
+        for theta in (30.0, 75.0):
+            plain = hemisphere_albedo(model.brdf, math.radians(theta), 1024, 1024)
+            np.testing.assert_allclose(model.albedo(math.radians(theta)), plain, rtol=1e-5)
+        rng = np.random.default_rng(1)
+        a, b = rng.normal(size=(200, 3)), rng.normal(size=(200, 3))
+        a[:, 2], b[:, 2] = np.abs(a[:, 2]), np.abs(b[:, 2])
+        a /= np.linalg.norm(a, axis=1, keepdims=True)
+        b /= np.linalg.norm(b, axis=1, keepdims=True)
+        np.testing.assert_allclose(model.brdf(a, b), model.brdf(b, a), rtol=1e-12)
