@@ -2,8 +2,9 @@
 Float64 NumPy reference implementations of the package's models: the oracle for the tests and
 the validation campaign, written independently of the plugins. The models (``lambert.py``,
 ``phong.py``, ``cooktorrance.py``, ``ward.py``, ``orennayar.py``, ``quadrature.py``) use NumPy
-alone; only :func:`for_spec` and :func:`color` here ask Mitsuba which variant is set (RGB colours mean something else in spectral
-variants) and parse specs through :mod:`mi_brdfs.bsdfspec`.
+alone; only :func:`for_spec` and :func:`color` here ask Mitsuba which variant is set (RGB
+colours mean something else in spectral variants) and parse specs through
+:mod:`mi_brdfs.bsdfspec`.
 
 Each model is a small class with ``brdf(wi, wo)`` → f (without the cosine), arrays of shape
 (n, channels), directions as (n, 3) unit vectors in the local frame (normal = +z, ``wi`` towards
