@@ -93,8 +93,30 @@ def variant_tools() -> SimpleNamespace:
             return colour(*[c * a * b for c in value])
         return value * a * b
 
+    UInt32 = mi.UInt32
+    glossy_flag, diffuse_flag = flag("GlossyReflection"), flag("DiffuseReflection")
+
+    def glossy_or_diffuse(bs, pick, glossy, diffuse, glossy_index, diffuse_index):
+        """
+        Fill ``bs`` for a two-lobe reflection model (``phong``, ``ward``): ωo from
+        ``glossy()`` where ``pick``, else from ``diffuse()``, with the lobe's type and
+        component index (None: that lobe is absent), η = 1.
+        """
+        bs.wo = choose(pick, glossy, diffuse)
+        bs.sampled_type = select(pick, UInt32(glossy_flag), UInt32(diffuse_flag))
+        bs.sampled_component = select(pick, UInt32(glossy_index or 0), UInt32(diffuse_index or 0))
+        bs.eta = 1.0
+        return bs
+
+    def weight(value, pdf, active):
+        """The sample weight f·cosθo / pdf, 0 where inactive or the pdf is 0."""
+        ok = active & (pdf > 0)
+        return select(ok, value / select(ok, pdf, 1.0), 0.0)
+
     return SimpleNamespace(
         jit=jit,
+        glossy_or_diffuse=glossy_or_diffuse,
+        weight=weight,
         select=select,
         choose=choose,
         new_sample=new_sample,
@@ -344,6 +366,45 @@ def roughness(props, plugin: str, default: float = 0.1):
             warn(plugin, f"{name} = {low[0]:g} is clamped to {ALPHA_MIN:g}, as in Mitsuba's "
                          f"microfacet models")
     return alphas[0], alphas[-1]
+
+
+def number_or_texture(props, plugin: str, name: str, default: float, lo: float, hi: float,
+                      unit: str = ""):
+    """
+    A parameter given as a number (-> float) or a texture (-> mi.Texture, with
+    :func:`texture`'s checks), finite and within [``lo``, ``hi``]; a colour is refused (one
+    value per point is meant). ``unit`` is named in the error (e.g. "radians").
+    """
+    T = _types()
+    if name in props and props.type(name) not in (T.Float, T.Integer):
+        if props.type(name) != T.Object:
+            raise ParameterError(plugin, name, props[name], "must be a float or a texture"
+                                 + (f" ({unit})" if unit else ""))
+        return texture(props, plugin, name, default, lo, hi)
+    return number(props, plugin, name, default, lo, hi)
+
+
+def alpha_at(alpha_u, alpha_v, si, active):
+    """
+    α of :func:`roughness`'s textures at ``si``, clamped to
+    :data:`mi_brdfs.scattering.microfacet.ALPHA_MIN` as Mitsuba clamps it: a number when
+    isotropic (``alpha_v`` is ``alpha_u``), else the pair (αu, αv).
+    """
+    from ..scattering.microfacet import ALPHA_MIN
+    a_u = dr.maximum(alpha_u.eval_1(si, active), ALPHA_MIN)
+    return a_u if alpha_v is alpha_u else (a_u, dr.maximum(alpha_v.eval_1(si, active), ALPHA_MIN))
+
+
+def constant_alpha(alpha_u, alpha_v):
+    """α of :func:`roughness`'s textures as Python floats (clamped), when neither varies over the
+    surface (for scalar variants, read once); else None."""
+    from ..scattering.microfacet import ALPHA_MIN
+    textures = (alpha_u,) if alpha_v is alpha_u else (alpha_u, alpha_v)
+    if any(tex.is_spatially_varying() for tex in textures):
+        return None
+    si = mi.SurfaceInteraction3f()
+    const = tuple(max(float(tex.eval_1(si)), ALPHA_MIN) for tex in textures)
+    return const if len(const) > 1 else const[0]
 
 
 def number(props, plugin: str, name: str, default: float, lo: float = -math.inf,

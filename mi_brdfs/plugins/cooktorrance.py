@@ -669,10 +669,7 @@ class CookTorrance(mi.BSDF):
         Mitsuba clamps it."""
         if self._alpha_const is not None:
             return self._alpha_const
-        alpha_u = dr.maximum(self.m_alpha_u.eval_1(si, active), mf.ALPHA_MIN)
-        if not self.m_anisotropic:
-            return alpha_u
-        return alpha_u, dr.maximum(self.m_alpha_v.eval_1(si, active), mf.ALPHA_MIN)
+        return _common.alpha_at(self.m_alpha_u, self.m_alpha_v, si, active)
 
     def eval_diffuse_reflectance(self, si, active=True):
         # The default, eval(wo = n)·π, would count the glossy lobe
@@ -710,11 +707,8 @@ class CookTorrance(mi.BSDF):
                 self._eta, self._inv_eta = float(self._eta), float(self._inv_eta)
         if V.jit:
             return
-        si = mi.SurfaceInteraction3f()
-        alphas = (self.m_alpha_u, self.m_alpha_v) if self.m_anisotropic else (self.m_alpha_u,)
-        if not any(tex.is_spatially_varying() for tex in alphas):
-            const = tuple(max(float(tex.eval_1(si)), mf.ALPHA_MIN) for tex in alphas)
-            self._alpha_const = const if self.m_anisotropic else const[0]
+        self._alpha_const = _common.constant_alpha(self.m_alpha_u, self.m_alpha_v)
+        if self._alpha_const is not None:
             self._distr = mf.distribution(self.m_distribution, self._alpha_const)
         if V.per_channel and not self.m_transmission:
             fresnel_on = self._fresnel_term is not None

@@ -10,7 +10,6 @@ import math
 import drjit as dr
 import mitsuba as mi
 
-from ..errors import ParameterError
 from ..scattering import orennayar as terms_module
 from . import _common
 
@@ -32,13 +31,7 @@ FLAGS = _common.flag("DiffuseReflection", "FrontSide")
 
 def _sigma(props):
     """σ: a number (-> float) or a texture (-> mi.Texture), finite and within [0, π/2]."""
-    T = mi.Properties.Type
-    if "sigma" in props and props.type("sigma") not in (T.Float, T.Integer):
-        if props.type("sigma") != T.Object:
-            raise ParameterError(PLUGIN, "sigma", props["sigma"],
-                                 "must be a float or a texture (radians)")
-        return _common.texture(props, PLUGIN, "sigma", 0.2, 0.0, SIGMA_MAX)
-    return _common.number(props, PLUGIN, "sigma", 0.2, 0.0, SIGMA_MAX)
+    return _common.number_or_texture(props, PLUGIN, "sigma", 0.2, 0.0, SIGMA_MAX, "radians")
 
 
 class OrenNayar(mi.BSDF):

@@ -10,7 +10,6 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from ..errors import ParameterError
 from ..scattering import mixture
 from ..scattering import phong as lobes
 from . import _common
@@ -33,13 +32,7 @@ AMBIENT_HINT = ("a path tracer has no ambient term: the environment provides it;
 
 def _exponent(props):
     """The exponent: a number (-> float) or a texture (-> mi.Texture), finite and ≥ 0."""
-    T = mi.Properties.Type
-    if "exponent" in props and props.type("exponent") not in (T.Float, T.Integer):
-        if props.type("exponent") != T.Object:
-            raise ParameterError(PLUGIN, "exponent", props["exponent"],
-                                 "must be a float or a texture")
-        return _common.texture(props, PLUGIN, "exponent", 30.0, 0.0, EXPONENT_MAX)
-    return _common.number(props, PLUGIN, "exponent", 30.0, 0.0, EXPONENT_MAX)
+    return _common.number_or_texture(props, PLUGIN, "exponent", 30.0, 0.0, EXPONENT_MAX)
 
 
 V = _common.variant_tools()
@@ -215,15 +208,10 @@ class Phong(mi.BSDF):
             return cosine_hemisphere(sample2)
 
         pick = (sample1 < self._p_glossy) if has_diffuse and has_glossy else has_glossy
-        bs.wo = V.choose(pick, glossy, diffuse)
-        bs.sampled_type = V.select(pick, UInt32(GLOSSY), UInt32(DIFFUSE))
-        bs.sampled_component = V.select(pick, UInt32(self._glossy or 0),
-                                        UInt32(self._diffuse or 0))
-        bs.eta = 1.0
+        V.glossy_or_diffuse(bs, pick, glossy, diffuse, self._glossy, self._diffuse)
         # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
         value, bs.pdf = self._eval_pdf(ctx, si, bs.wo, active, has_diffuse, has_glossy, consts)
-        ok = active & (bs.pdf > 0)
-        return bs, V.select(ok, value / V.select(ok, bs.pdf, 1.0), 0.0)
+        return bs, V.weight(value, bs.pdf, active)
 
     def eval(self, ctx, si, wo, active=True):
         return self.eval_pdf(ctx, si, wo, active)[0]

@@ -150,15 +150,10 @@ class Ward(mi.BSDF):
             return cosine_hemisphere(sample2)
 
         pick = (sample1 < self._p_glossy) if has_diffuse and has_glossy else has_glossy
-        bs.wo = V.choose(pick, glossy, diffuse)
-        bs.sampled_type = V.select(pick, UInt32(GLOSSY), UInt32(DIFFUSE))
-        bs.sampled_component = V.select(pick, UInt32(self._glossy or 0),
-                                        UInt32(self._diffuse or 0))
-        bs.eta = 1.0
+        V.glossy_or_diffuse(bs, pick, glossy, diffuse, self._glossy, self._diffuse)
         # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
         value, bs.pdf = self._eval_pdf(si, wi, bs.wo, active, has_diffuse, has_glossy, alpha)
-        ok = active & (bs.pdf > 0)
-        return bs, V.select(ok, value / V.select(ok, bs.pdf, 1.0), 0.0)
+        return bs, V.weight(value, bs.pdf, active)
 
     def eval(self, ctx, si, wo, active=True):
         return self.eval_pdf(ctx, si, wo, active)[0]
@@ -199,10 +194,7 @@ class Ward(mi.BSDF):
         """α at ``si`` (the pair (αu, αv) when anisotropic), clamped to 10⁻⁴."""
         if self._alpha_const is not None:
             return self._alpha_const
-        alpha_u = dr.maximum(self.m_alpha_u.eval_1(si, active), mf.ALPHA_MIN)
-        if not self.m_anisotropic:
-            return alpha_u
-        return alpha_u, dr.maximum(self.m_alpha_v.eval_1(si, active), mf.ALPHA_MIN)
+        return _common.alpha_at(self.m_alpha_u, self.m_alpha_v, si, active)
 
     def _enabled(self, ctx):
         """Which lobes this context asks for: (diffuse, glossy), Python bools."""
@@ -219,11 +211,7 @@ class Ward(mi.BSDF):
         if V.jit:
             dr.make_opaque(self._p_glossy)
             return
-        alphas = (self.m_alpha_u, self.m_alpha_v) if self.m_anisotropic else (self.m_alpha_u,)
-        if not any(tex.is_spatially_varying() for tex in alphas):
-            si = mi.SurfaceInteraction3f()
-            const = tuple(max(float(tex.eval_1(si)), mf.ALPHA_MIN) for tex in alphas)
-            self._alpha_const = const if self.m_anisotropic else const[0]
+        self._alpha_const = _common.constant_alpha(self.m_alpha_u, self.m_alpha_v)
 
     def eval_diffuse_reflectance(self, si, active=True):
         if self._diffuse is None:
