@@ -153,6 +153,56 @@ def flag(*names: str) -> int:
     return value
 
 
+# Methods that several plugin classes share. nanobind allows a single base class (the variant's
+# mi.BSDF), so a plugin takes them as class attributes (``eval = _common.eval_half``), not
+# from a mixin.
+
+def eval_half(self, ctx, si, wo, active=True):
+    """``eval`` of a plugin whose ``eval_pdf`` does the work (in JIT variants the unused pdf
+    is not computed: the trace drops it)."""
+    return self.eval_pdf(ctx, si, wo, active)[0]
+
+
+def pdf_half(self, ctx, si, wo, active=True):
+    """``pdf`` of a plugin whose ``eval_pdf`` does the work."""
+    return self.eval_pdf(ctx, si, wo, active)[1]
+
+
+def set_two_lobes(self, diffuse, specular, glossy_flags: int) -> None:
+    """
+    The components of a two-lobe reflection model (``phong``, ``ward``), in order (diffuse,
+    glossy), of the lobes whose reflectance is not the constant 0 (a lobe that is 0 is left
+    out entirely); their indices in ``self._diffuse``, ``self._glossy`` (None: absent).
+    """
+    self._diffuse = self._glossy = None
+    components = []
+    if not is_zero(diffuse):
+        self._diffuse = len(components)
+        components.append(flag("DiffuseReflection", "FrontSide"))
+    if not is_zero(specular):
+        self._glossy = len(components)
+        components.append(glossy_flags)
+    self.m_components = components  # a copy crosses to C++: assign, don't append
+    self.m_flags = 0
+    for c in components:
+        self.m_flags |= c
+
+
+def two_lobes_enabled(self, ctx):
+    """Which lobes of :func:`set_two_lobes` the context asks for: (diffuse, glossy), bools."""
+    return (self._diffuse is not None and
+            ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, self._diffuse),
+            self._glossy is not None and
+            ctx.is_enabled(mi.BSDFFlags.GlossyReflection, self._glossy))
+
+
+def two_lobes_diffuse_reflectance(self, si, active=True):
+    """``eval_diffuse_reflectance`` of :func:`set_two_lobes`'s models: ρd, or 0 without it."""
+    if self._diffuse is None:
+        return mi.Spectrum(0.0)
+    return self.m_diffuse_reflectance.eval(si, active)
+
+
 # -------------------------------------------------------------------------------------------------
 # Property readers
 # -------------------------------------------------------------------------------------------------

@@ -370,6 +370,8 @@ class CookTorrance(mi.BSDF):
                                  "must be \"exact\" with transmission = true (the refracted "
                                  "fraction is 1 − F, with total internal reflection)")
 
+    eval, pdf = _common.eval_half, _common.pdf_half
+
     def sample(self, ctx, si, sample1, sample2, active=True):
         bs, sample2 = V.new_sample(), V.point2(sample2)
         lobes = use_mf, use_diffuse = self._lobes(ctx)
@@ -413,12 +415,6 @@ class CookTorrance(mi.BSDF):
         active = active & (wo.z > 0)
         weight, bs.pdf = self._microfacet(si, wi, wo, active, weight=True)
         return bs, V.select(active, V.depolarize(weight), 0.0)
-
-    def eval(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[0]
-
-    def pdf(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[1]
 
     def eval_pdf(self, ctx, si, wo, active=True):
         lobes = self._lobes(ctx)

@@ -174,22 +174,16 @@ class Phong(mi.BSDF):
                              "(its albedo at normal incidence is their sum)")
 
         # Lobes in component order; one whose reflectance is the constant 0 is left out.
-        self._diffuse = self._glossy = None  # component indices
-        components = []
-        if not _common.is_zero(self.m_diffuse_reflectance):
-            self._diffuse = len(components)
-            components.append(DIFFUSE | FRONT)
-        if not _common.is_zero(self.m_specular_reflectance):
-            self._glossy = len(components)
-            components.append(GLOSSY | FRONT | (NONSYMMETRIC if self.m_form == "original" else 0))
-        self.m_components = components
-        self.m_flags = 0
-        for c in components:
-            self.m_flags |= c
+        _common.set_two_lobes(self, self.m_diffuse_reflectance, self.m_specular_reflectance,
+                        GLOSSY | FRONT | (NONSYMMETRIC if self.m_form == "original" else 0))
         mirror = self.m_lobe == "mirror"
         self._lobe_value = lobes.mirror_lobe if mirror else lobes.halfway_lobe
         self._lobe_sample = lobes.sample_mirror if mirror else lobes.sample_halfway
         self.parameters_changed([])
+
+    eval, pdf = _common.eval_half, _common.pdf_half
+    _enabled = _common.two_lobes_enabled
+    eval_diffuse_reflectance = _common.two_lobes_diffuse_reflectance
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         bs, sample2 = V.new_sample(), V.point2(sample2)
@@ -212,12 +206,6 @@ class Phong(mi.BSDF):
         # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
         value, bs.pdf = self._eval_pdf(ctx, si, bs.wo, active, has_diffuse, has_glossy, consts)
         return bs, V.weight(value, bs.pdf, active)
-
-    def eval(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[0]
-
-    def pdf(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[1]
 
     def eval_pdf(self, ctx, si, wo, active=True):
         has_diffuse, has_glossy = self._enabled(ctx)
@@ -260,11 +248,6 @@ class Phong(mi.BSDF):
             return constants(self.m_form, self.m_lobe, self.m_exponent.eval_1(si, active))
         return self._constants
 
-    def _enabled(self, ctx):
-        """Which lobes this context asks for: (diffuse, glossy), Python bools."""
-        return (self._diffuse is not None and ctx.is_enabled(DIFFUSE, self._diffuse),
-                self._glossy is not None and ctx.is_enabled(GLOSSY, self._glossy))
-
     def parameters_changed(self, keys=()):
         """Precompute the lobe constants and the lobe choice probability."""
         n = self.m_exponent
@@ -280,11 +263,6 @@ class Phong(mi.BSDF):
         self._p_glossy = Float(mixture.probability(w_s, w_d))
         if V.jit:
             dr.make_opaque(self._p_glossy, *([] if self._textured_exponent else self._constants))
-
-    def eval_diffuse_reflectance(self, si, active=True):
-        if self._diffuse is None:
-            return Spectrum(0.0)
-        return self.m_diffuse_reflectance.eval(si, active)
 
     def traverse(self, cb):
         # Only the parameters of lobes that exist: the lobe structure is fixed at load time.

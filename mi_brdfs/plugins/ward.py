@@ -118,19 +118,13 @@ class Ward(mi.BSDF):
                          ("specular_reflectance", self.m_specular_reflectance),
                          "the lobes' albedos then add up to more than 1 at normal incidence")
         # Lobes in component order; one whose reflectance is the constant 0 is left out.
-        self._diffuse = self._glossy = None  # component indices
-        components = []
-        if not _common.is_zero(self.m_diffuse_reflectance):
-            self._diffuse = len(components)
-            components.append(DIFFUSE | FRONT)
-        if not _common.is_zero(self.m_specular_reflectance):
-            self._glossy = len(components)
-            components.append(GLOSSY | FRONT | (ANISOTROPIC if self.m_anisotropic else 0))
-        self.m_components = components
-        self.m_flags = 0
-        for c in components:
-            self.m_flags |= c
+        _common.set_two_lobes(self, self.m_diffuse_reflectance, self.m_specular_reflectance,
+                        GLOSSY | FRONT | (ANISOTROPIC if self.m_anisotropic else 0))
         self.parameters_changed()
+
+    eval, pdf = _common.eval_half, _common.pdf_half
+    _enabled = _common.two_lobes_enabled
+    eval_diffuse_reflectance = _common.two_lobes_diffuse_reflectance
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         bs, sample2 = V.new_sample(), V.point2(sample2)
@@ -154,12 +148,6 @@ class Ward(mi.BSDF):
         # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
         value, bs.pdf = self._eval_pdf(si, wi, bs.wo, active, has_diffuse, has_glossy, alpha)
         return bs, V.weight(value, bs.pdf, active)
-
-    def eval(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[0]
-
-    def pdf(self, ctx, si, wo, active=True):
-        return self.eval_pdf(ctx, si, wo, active)[1]
 
     def eval_pdf(self, ctx, si, wo, active=True):
         has_diffuse, has_glossy = self._enabled(ctx)
@@ -196,11 +184,6 @@ class Ward(mi.BSDF):
             return self._alpha_const
         return _common.alpha_at(self.m_alpha_u, self.m_alpha_v, si, active)
 
-    def _enabled(self, ctx):
-        """Which lobes this context asks for: (diffuse, glossy), Python bools."""
-        return (self._diffuse is not None and ctx.is_enabled(DIFFUSE, self._diffuse),
-                self._glossy is not None and ctx.is_enabled(GLOSSY, self._glossy))
-
     def parameters_changed(self, keys=()):
         """The lobe choice probability; in scalar variants a constant α, read once."""
         # Lobe choice by the reflectances' means (as Mitsuba 0.6's ward): constant per BSDF.
@@ -212,11 +195,6 @@ class Ward(mi.BSDF):
             dr.make_opaque(self._p_glossy)
             return
         self._alpha_const = _common.constant_alpha(self.m_alpha_u, self.m_alpha_v)
-
-    def eval_diffuse_reflectance(self, si, active=True):
-        if self._diffuse is None:
-            return Spectrum(0.0)
-        return self.m_diffuse_reflectance.eval(si, active)
 
     def traverse(self, cb):
         # Only the parameters of lobes that exist: the lobe structure is fixed at load time.
