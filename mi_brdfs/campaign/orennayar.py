@@ -45,6 +45,31 @@ def energy(ctx: Context, s: Section) -> str:
     return md_table(["form", "σ", *(f"E({t:g}°)" for t in THETAS)], rows)
 
 
+def albedo_figure(ctx: Context) -> str:
+    """E(θ) of both forms for several σ against Lambert's (ρ = 1): lines the float64
+    reference, dots the plugin's sample() mean."""
+    plt = pyplot()
+    thetas = np.linspace(0.0, 89.0, ctx.n(30, 6))
+    dots = thetas[:: max(1, len(thetas) // 6)]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.6), sharey=True)
+    for ax, form in zip(axes, FORMS):
+        ax.axhline(1.0, color="0.3", lw=1.2, label="lambert (ρ = 1)")
+        for sigma, color in zip((0.2, 0.5, 1.0, math.pi / 2), ("C0", "C1", "C2", "C3")):
+            ref = OrenNayar(1.0, sigma, form)
+            ax.plot(thetas, [float(ref.albedo(math.radians(t), 96, 192)[0]) for t in thetas],
+                    "-", color=color, lw=1.2, label=f"σ = {sigma:.3g}")
+            means = [checks.albedo_sampled(spec(form, sigma), math.radians(t),
+                                           n=ctx.n(100_000, 10_000))[0][0] for t in dots]
+            ax.plot(dots, means, "o", color=color, ms=3)
+        ax.set_title(f"{form} (lines: float64 reference; dots: sample() mean)", fontsize=9)
+        ax.set_xlabel("incident angle θ (degrees)")
+        ax.set_xlim(0, 90)
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("albedo E(θ), ρ = 1")
+    axes[0].legend(fontsize=8)
+    return save_figure(fig, ctx.figure("orennayar_albedo.png"))
+
+
 def backscatter(ctx: Context, s: Section) -> tuple[str, str]:
     """
     The lectures' observation: a rough diffuse surface retro-reflects and looks flatter.
@@ -170,6 +195,7 @@ def rendered(ctx: Context, s: Section) -> str:
 def section(ctx: Context) -> Section:
     s = Section("Oren-Nayar: rough diffuse")
     table = energy(ctx, s)
+    fig_albedo = albedo_figure(ctx)
     fig, flat = backscatter(ctx, s)
     ct = checks_table(ctx, s)
     limit = lambert_limit(ctx, s)
@@ -186,6 +212,7 @@ def section(ctx: Context) -> Section:
         ". The qualitative form's albedo scales with ρ, so it stays ≤ 1 for ρ ≤ 1/max; "
         "the full form's interreflection term scales with ρ². Rough surfaces (σ ≳ 0.5) lose "
         "energy, as the single-scattering model of V-grooves does:", "", table, "",
+        image(ctx, fig_albedo, "Oren-Nayar albedo curves against Lambert"), "",
         "**Backscatter and flatness**, the lectures' observation measured: the light returned "
         "towards the light grows with σ, and a rough sphere lit from the viewer's direction "
         "is flatter than a Lambertian one (its rim stays bright):", "",
