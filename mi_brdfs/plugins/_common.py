@@ -96,17 +96,56 @@ def variant_tools() -> SimpleNamespace:
     UInt32 = mi.UInt32
     glossy_flag, diffuse_flag = flag("GlossyReflection"), flag("DiffuseReflection")
 
-    def glossy_or_diffuse(bs, pick, glossy, diffuse, glossy_index, diffuse_index):
+    cosine_hemisphere = mi.warp.square_to_cosine_hemisphere
+    cosine_hemisphere_pdf = mi.warp.square_to_cosine_hemisphere_pdf
+    Spectrum, Float = mi.Spectrum, mi.Float
+
+    def glossy_or_diffuse(bs, sample1, sample2, p_glossy, has_diffuse, has_glossy, glossy,
+                          glossy_index, diffuse_index):
         """
         Fill ``bs`` for a two-lobe reflection model (``phong``, ``ward``): ωo from
-        ``glossy()`` where ``pick``, else from ``diffuse()``, with the lobe's type and
-        component index (None: that lobe is absent), η = 1.
+        ``glossy()`` or from the cosine-weighted hemisphere (``sample2``), with both lobes on
+        the glossy one where ``sample1`` < ``p_glossy``; the lobe's type and component index
+        (None: that lobe is absent), η = 1.
         """
-        bs.wo = choose(pick, glossy, diffuse)
+        pick = (sample1 < p_glossy) if has_diffuse and has_glossy else has_glossy
+        bs.wo = choose(pick, glossy, lambda: cosine_hemisphere(sample2))
         bs.sampled_type = select(pick, UInt32(glossy_flag), UInt32(diffuse_flag))
         bs.sampled_component = select(pick, UInt32(glossy_index or 0), UInt32(diffuse_index or 0))
         bs.eta = 1.0
         return bs
+
+    def cosine_sample(bs, sample2):
+        """
+        Fill ``bs`` for a one-lobe diffuse model (``lambert``, ``orennayar``): ωo from the
+        cosine-weighted hemisphere, pdf cosθo/π, component 0; returns (ωo, pdf).
+        """
+        bs.wo = wo = cosine_hemisphere(point2(sample2))
+        bs.pdf = pdf = cosine_hemisphere_pdf(wo)
+        bs.eta = 1.0
+        bs.sampled_type = UInt32(diffuse_flag)
+        bs.sampled_component = UInt32(0)
+        return wo, pdf
+
+    def diffuse_methods():
+        """``eval``, ``pdf`` and ``eval_pdf`` of a one-lobe diffuse model, each 0 where the
+        context disables the lobe, else the class's ``_eval_pdf(si, wo, active)``."""
+        def eval(self, ctx, si, wo, active=True):
+            if not ctx.is_enabled(diffuse_flag):
+                return Spectrum(0.0)
+            return self._eval_pdf(si, wo, active)[0]
+
+        def pdf(self, ctx, si, wo, active=True):
+            if not ctx.is_enabled(diffuse_flag):
+                return Float(0.0)
+            return self._eval_pdf(si, wo, active)[1]
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            if not ctx.is_enabled(diffuse_flag):
+                return Spectrum(0.0), Float(0.0)
+            return self._eval_pdf(si, wo, active)
+
+        return eval, pdf, eval_pdf
 
     def weight(value, pdf, active):
         """The sample weight f·cosθo / pdf, 0 where inactive or the pdf is 0."""
@@ -116,6 +155,8 @@ def variant_tools() -> SimpleNamespace:
     return SimpleNamespace(
         jit=jit,
         glossy_or_diffuse=glossy_or_diffuse,
+        cosine_sample=cosine_sample,
+        diffuse_methods=diffuse_methods,
         weight=weight,
         select=select,
         choose=choose,

@@ -21,8 +21,7 @@ SIGMA_MAX = math.pi / 2
 
 V = _common.variant_tools()
 # Bound once per variant: in scalar variants these are looked up at every call otherwise.
-Spectrum, Float, UInt32 = mi.Spectrum, mi.Float, mi.UInt32
-cosine_hemisphere = mi.warp.square_to_cosine_hemisphere
+Spectrum, Float = mi.Spectrum, mi.Float
 cosine_hemisphere_pdf = mi.warp.square_to_cosine_hemisphere_pdf
 terms = V.terms(terms_module)
 DIFFUSE = _common.flag("DiffuseReflection")
@@ -115,30 +114,13 @@ class OrenNayar(mi.BSDF):
         if V.none(active) or not ctx.is_enabled(DIFFUSE):
             return bs, Spectrum(0.0)
         # ωo from the cosine-weighted hemisphere, pdf cosθo/π
-        bs.wo = wo = cosine_hemisphere(V.point2(sample2))
-        bs.pdf = pdf = cosine_hemisphere_pdf(wo)
-        bs.eta = 1.0
-        bs.sampled_type = UInt32(DIFFUSE)
-        bs.sampled_component = UInt32(0)
+        wo, pdf = V.cosine_sample(bs, sample2)
         # weight = f·cosθo / pdf = ρ·factor (ρ alone at σ = 0, as lambert)
         rho = self.m_reflectance.eval(si, active)
         weight = rho * self._factor(si, si.wi, wo, rho, active)
         return bs, V.select(active & (pdf > 0), V.depolarize(weight), 0.0)
 
-    def eval(self, ctx, si, wo, active=True):
-        if not ctx.is_enabled(DIFFUSE):
-            return Spectrum(0.0)
-        return self._eval_pdf(si, wo, active)[0]
-
-    def pdf(self, ctx, si, wo, active=True):
-        if not ctx.is_enabled(DIFFUSE):
-            return Float(0.0)
-        return self._eval_pdf(si, wo, active)[1]
-
-    def eval_pdf(self, ctx, si, wo, active=True):
-        if not ctx.is_enabled(DIFFUSE):
-            return Spectrum(0.0), Float(0.0)
-        return self._eval_pdf(si, wo, active)
+    eval, pdf, eval_pdf = V.diffuse_methods()
 
     def _eval_pdf(self, si, wo, active):
         """(f·cosθo, pdf) at ``wo``, for eval, pdf and eval_pdf."""

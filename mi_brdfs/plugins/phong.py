@@ -37,10 +37,9 @@ def _exponent(props):
 
 V = _common.variant_tools()
 # Bound once per variant: in scalar variants these are looked up at every call otherwise.
-Spectrum, Float, UInt32 = mi.Spectrum, mi.Float, mi.UInt32
-cosine_hemisphere = mi.warp.square_to_cosine_hemisphere
+Spectrum, Float = mi.Spectrum, mi.Float
 IMPORTANCE = mi.TransportMode.Importance
-DIFFUSE, GLOSSY = _common.flag("DiffuseReflection"), _common.flag("GlossyReflection")
+GLOSSY = _common.flag("GlossyReflection")
 FRONT, NONSYMMETRIC = _common.flag("FrontSide"), _common.flag("NonSymmetric")
 
 
@@ -194,15 +193,12 @@ class Phong(mi.BSDF):
         consts = self._lobe_constants(si, active) if has_glossy else None
 
         # ωo from the glossy lobe (cosⁿ about R, or H about N), or the cosine-weighted hemisphere;
-        # with both lobes on, sample1 picks one with probability p_glossy
+        # with both lobes on, sample1 picks one with probability p_glossy (V.glossy_or_diffuse)
         def glossy():
             return self._lobe_sample(si.wi, sample2, consts[1])
 
-        def diffuse():
-            return cosine_hemisphere(sample2)
-
-        pick = (sample1 < self._p_glossy) if has_diffuse and has_glossy else has_glossy
-        V.glossy_or_diffuse(bs, pick, glossy, diffuse, self._glossy, self._diffuse)
+        V.glossy_or_diffuse(bs, sample1, sample2, self._p_glossy, has_diffuse, has_glossy, glossy,
+                            self._glossy, self._diffuse)
         # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
         value, bs.pdf = self._eval_pdf(ctx, si, bs.wo, active, has_diffuse, has_glossy, consts)
         return bs, V.weight(value, bs.pdf, active)

@@ -17,10 +17,9 @@ PLUGIN = "ward"
 
 V = _common.variant_tools()
 # Bound once per variant: in scalar variants these are looked up at every call otherwise.
-Spectrum, Float, UInt32 = mi.Spectrum, mi.Float, mi.UInt32
-cosine_hemisphere = mi.warp.square_to_cosine_hemisphere
+Spectrum, Float = mi.Spectrum, mi.Float
 mf, vec, terms = V.terms(microfacet), V.terms(vector), V.terms(lobe_terms)
-DIFFUSE, GLOSSY = _common.flag("DiffuseReflection"), _common.flag("GlossyReflection")
+GLOSSY = _common.flag("GlossyReflection")
 FRONT, ANISOTROPIC = _common.flag("FrontSide"), _common.flag("Anisotropic")
 DIFFERENTIABLE = mi.ParamFlags.Differentiable
 DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
@@ -137,14 +136,12 @@ class Ward(mi.BSDF):
 
         # ωo: ωi reflected about a half vector of the Gaussian lobe, or the cosine-weighted
         # hemisphere; with both lobes on, sample1 picks one with probability p_glossy
+        # (V.glossy_or_diffuse)
         def glossy():
             return vec.reflect(wi, terms.sample(alpha, sample2))
 
-        def diffuse():
-            return cosine_hemisphere(sample2)
-
-        pick = (sample1 < self._p_glossy) if has_diffuse and has_glossy else has_glossy
-        V.glossy_or_diffuse(bs, pick, glossy, diffuse, self._glossy, self._diffuse)
+        V.glossy_or_diffuse(bs, sample1, sample2, self._p_glossy, has_diffuse, has_glossy, glossy,
+                            self._glossy, self._diffuse)
         # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
         value, bs.pdf = self._eval_pdf(si, wi, bs.wo, active, has_diffuse, has_glossy, alpha)
         return bs, V.weight(value, bs.pdf, active)

@@ -18,15 +18,10 @@ import math
 
 import numpy as np
 
+from .cooktorrance import _pair
 from .quadrature import direction, sphere_grid
 
 FORMS = ("original", "duer", "balanced")
-
-
-def _pair(alpha) -> tuple[float, float]:
-    if np.ndim(alpha) == 0:
-        return float(alpha), float(alpha)
-    return float(alpha[0]), float(alpha[1])
 
 
 class Ward:
