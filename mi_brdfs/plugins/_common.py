@@ -73,6 +73,18 @@ def variant_tools() -> SimpleNamespace:
         """A direction as ``mi.Vector3f``: the built-ins also take lists and tuples."""
         return v if type(v) is Vector3f else Vector3f(v)
 
+    if jit:
+        def direction(v):
+            """A direction for the terms: ``mi.Vector3f`` (lists and tuples converted)."""
+            return vector(v)
+
+        def to_mitsuba(v):
+            """A direction from the terms as ``mi.Vector3f`` (for ``bs.wo``)."""
+            return v
+    else:
+        # the terms compiled for floats read directions as floats.Vec3 (5× cheaper to read)
+        direction, to_mitsuba = floats.to_vec3, floats.to_mitsuba
+
     def point2(u):
         """A 2D sample as ``mi.Point2f``: the built-ins also take lists and tuples."""
         return u if type(u) is Point2f else Point2f(u)
@@ -109,7 +121,7 @@ def variant_tools() -> SimpleNamespace:
         (None: that lobe is absent), η = 1.
         """
         pick = (sample1 < p_glossy) if has_diffuse and has_glossy else has_glossy
-        bs.wo = choose(pick, glossy, lambda: cosine_hemisphere(sample2))
+        bs.wo = to_mitsuba(choose(pick, glossy, lambda: cosine_hemisphere(sample2)))
         bs.sampled_type = select(pick, UInt32(glossy_flag), UInt32(diffuse_flag))
         bs.sampled_component = select(pick, UInt32(glossy_index or 0), UInt32(diffuse_index or 0))
         bs.eta = 1.0
@@ -171,6 +183,8 @@ def variant_tools() -> SimpleNamespace:
         scale=scale,
         terms=terms,
         vector=vector,
+        direction=direction,
+        to_mitsuba=to_mitsuba,
         point2=point2,
         spectrum=spectrum,
         # Mueller matrices in polarized variants; the identity elsewhere.

@@ -126,6 +126,10 @@ TRANSMISSION_FLAGS = _common.flag("GlossyTransmission", "FrontSide", "BackSide",
 RADIANCE = mi.TransportMode.Radiance
 AD = dr.is_diff_v(mi.Float)
 DIFFUSE_FLAGS = _common.flag("DiffuseReflection", "FrontSide")
+#: The sample record's lobe indices and types, made once (a UInt32 costs 80 ns per call in a
+#: scalar variant).
+LOBE_0, LOBE_1 = UInt32(0), UInt32(1)
+TYPE_GLOSSY, TYPE_DIFFUSE, TYPE_GLOSSY_T = UInt32(GLOSSY), UInt32(DIFFUSE), UInt32(GLOSSY_T)
 DIFFERENTIABLE = mi.ParamFlags.Differentiable
 DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
 fres = V.terms(fresnel)
@@ -375,7 +379,7 @@ class CookTorrance(mi.BSDF):
     def sample(self, ctx, si, sample1, sample2, active=True):
         bs, sample2 = V.new_sample(), V.point2(sample2)
         lobes = use_mf, use_diffuse = self._lobes(ctx)
-        wi = si.wi
+        wi = V.direction(si.wi)
         if self.m_transmission:
             return self._sample_dielectric(ctx, si, wi, sample1, sample2, active, bs, lobes)
         active = active & (wi.z > 0)  # one-sided: the local frame's z is cosθ
@@ -395,11 +399,11 @@ class CookTorrance(mi.BSDF):
         def diffuse():
             return cosine_hemisphere(sample2)
 
-        bs.wo = V.choose(pick, microfacet, diffuse)
-        bs.sampled_type = V.select(pick, UInt32(GLOSSY), UInt32(DIFFUSE))
-        bs.sampled_component = V.select(pick, UInt32(0), UInt32(1))
+        bs.wo = V.to_mitsuba(V.choose(pick, microfacet, diffuse))
+        bs.sampled_type = V.select(pick, TYPE_GLOSSY, TYPE_DIFFUSE)
+        bs.sampled_component = V.select(pick, LOBE_0, LOBE_1)
         bs.eta = 1.0
-        value, bs.pdf = self._eval_pdf(si, wi, bs.wo, active, lobes, p)
+        value, bs.pdf = self._eval_pdf(si, wi, V.direction(bs.wo), active, lobes, p)
         ok = active & (bs.pdf > 0)
         return bs, V.select(ok, value / V.select(ok, bs.pdf, 1.0), 0.0)
 
@@ -407,11 +411,11 @@ class CookTorrance(mi.BSDF):
         """:meth:`sample` of the microfacet lobe alone, with the weight in closed form."""
         # a microfacet normal m, and ωo = ωi reflected about it
         m = self._sample_normal(si, wi, active, sample2, sample1)
-        bs.wo = vec.reflect(wi, m)
-        bs.sampled_type, bs.sampled_component = UInt32(GLOSSY), UInt32(0)
+        bs.wo = V.to_mitsuba(vec.reflect(wi, m))
+        bs.sampled_type, bs.sampled_component = TYPE_GLOSSY, LOBE_0
         bs.eta = 1.0
         # the terms at bs.wo as stored (float32 in scalar variants), so that bs.pdf = pdf(bs.wo)
-        wo = bs.wo
+        wo = V.direction(bs.wo)
         active = active & (wo.z > 0)
         weight, bs.pdf = self._microfacet(si, wi, wo, active, weight=True)
         return bs, V.select(active, V.depolarize(weight), 0.0)
@@ -421,10 +425,10 @@ class CookTorrance(mi.BSDF):
         if not (lobes[0] or lobes[1]):
             return Spectrum(0.0), Float(0.0)
         if self.m_transmission:
-            value, pdf = self._dielectric(si, si.wi, V.vector(wo), active, lobes,
+            value, pdf = self._dielectric(si, V.direction(si.wi), V.direction(wo), active, lobes,
                                           ctx.mode == RADIANCE)
             return V.depolarize(value), pdf
-        return self._eval_pdf(si, si.wi, V.vector(wo), active, lobes)
+        return self._eval_pdf(si, V.direction(si.wi), V.direction(wo), active, lobes)
 
     def _eval_pdf(self, si, wi, wo, active, lobes, p_microfacet=None):
         """(f·cosθo, pdf of :meth:`sample`) at ``wo``: the enabled lobes and their mixture."""
@@ -514,15 +518,15 @@ class CookTorrance(mi.BSDF):
         def refracted():
             return vec.refract(wi, m, cos_t, eta_ti)
 
-        bs.wo = V.choose(pick_r, reflected, refracted)
-        bs.eta = V.select(pick_r, Float(1.0), eta_it)
-        bs.sampled_component = V.select(pick_r, UInt32(0), UInt32(1))
-        bs.sampled_type = V.select(pick_r, UInt32(GLOSSY), UInt32(GLOSSY_T))
+        bs.wo = V.to_mitsuba(V.choose(pick_r, reflected, refracted))
+        bs.eta = V.select(pick_r, 1.0, eta_it)
+        bs.sampled_component = V.select(pick_r, LOBE_0, LOBE_1)
+        bs.sampled_type = V.select(pick_r, TYPE_GLOSSY, TYPE_GLOSSY_T)
         # the terms at bs.wo as stored, so that bs.pdf = pdf(bs.wo); a reflection that left
         # below the surface (or a refraction above it) is no sample, nor is a refraction that
         # float32 cannot represent (for η ≳ 100 at grazing facets, Snell's vector form loses
         # the unit length to cancellation)
-        wo = bs.wo
+        wo = V.direction(bs.wo)
         same_side = cos_i * wo.z > 0.0
         unit = dr.abs(vec.dot(wo, wo) - 1.0) < 1e-3
         active = active & V.select(pick_r, same_side, (cos_i * wo.z < 0.0) & unit)
@@ -534,9 +538,9 @@ class CookTorrance(mi.BSDF):
         """
         (f·|cosθo|, pdf) of the rough dielectric (transmission), both sides, both lobes; with
         ``weight`` (for :meth:`sample`) (f·|cosθo|/pdf, pdf) in closed form: k·F̂·G1(ωo) with
-        visible normals, k·F̂·(D/D_widened)·G·|ωo·h|/(|cosθi| cosθh) with D·cos (|ωi·h| for a refraction), where k is the
-        lobe's factor (and 1/η² for radiance through refraction) and F̂ is 1 when both lobes
-        are sampled, else F or 1 − F.
+        visible normals, k·F̂·(D/D_widened)·G·|ωo·h|/(|cosθi| cosθh) with D·cos (|ωi·h| for a
+        refraction), where k is the lobe's factor (and 1/η² for radiance through refraction)
+        and F̂ is 1 when both lobes are sampled, else F or 1 − F.
         """
         has_r, has_t = lobes
         cos_i, cos_o = wi.z, wo.z
@@ -569,9 +573,8 @@ class CookTorrance(mi.BSDF):
             pdf = mf.pdf_ndf(d_sample, m)
         if has_r and has_t:
             pdf = pdf * lobe_f
-        jacobian = V.select(reflect, 1.0 / dr.maximum(4.0 * dr.abs(cos_om), 1e-30),
-                            mf.refraction_jacobian(wi, wo, m, eta))
-        pdf = pdf * jacobian
+        pdf = pdf * V.choose(reflect, lambda: 1.0 / dr.maximum(4.0 * dr.abs(cos_om), 1e-30),
+                             lambda: mf.refraction_jacobian(wi, wo, m, eta))
         # the lobe's factor: ks, or kt (and 1/η² for radiance: Veach 1997, §5.2)
         factor = self._lobe_factor(si, reflect, eta, radiance, active)
         if weight:
@@ -583,15 +586,19 @@ class CookTorrance(mi.BSDF):
                 cos_h = dr.abs(V.select(reflect, cos_om, cos_im))
                 shape = (D / dr.maximum(d_sample, 1e-30)) * g1_wi * g1_wo * cos_h / \
                     dr.maximum(abs_cos_i * m.z, 1e-30)
-            value = factor * (chosen * shape)
+            value = V.scale(factor, chosen * shape)
             active = active & (pdf > 0.0)
         else:
             G = g1_wi * g1_wo
-            reflected = F * D * G / (4.0 * abs_cos_i)
-            denom = cos_im + eta * cos_om
-            refracted = dr.abs((1.0 - F) * D * G * eta * eta * cos_im * cos_om /
-                               dr.maximum(cos_i * dr.square(denom), -1e30))
-            value = factor * V.select(reflect, reflected, refracted)
+
+            def reflected():
+                return F * D * G / (4.0 * abs_cos_i)
+
+            def refracted():
+                denom = cos_im + eta * cos_om
+                return dr.abs((1.0 - F) * D * G * eta * eta * cos_im * cos_om /
+                              dr.maximum(cos_i * dr.square(denom), -1e30))
+            value = V.scale(factor, V.choose(reflect, reflected, refracted))
         return V.select(active, value, 0.0), V.select(active, pdf, 0.0)
 
     @staticmethod
@@ -605,11 +612,17 @@ class CookTorrance(mi.BSDF):
         return dr.replace_grad(Float(1.0), probability / dr.detach(probability))
 
     def _lobe_factor(self, si, reflect, eta, radiance, active):
-        """ks for a reflection, kt (over η² in radiance transport) for a refraction."""
+        """ks for a reflection, kt (over η² in radiance transport) for a refraction: spectra,
+        or lists of per-channel floats where they are constants (see :meth:`parameters_changed`)."""
         def reflection():
+            if self._ks_channels is not None:
+                return self._ks_channels
             return self.m_specular_reflectance.eval(si, active)
 
         def refraction():
+            kt = self._kt_channels
+            if kt is not None:
+                return [c / (eta * eta) for c in kt] if radiance else kt
             kt = self.m_specular_transmittance.eval(si, active)
             return kt / dr.square(eta) if radiance else kt
 
@@ -695,12 +708,17 @@ class CookTorrance(mi.BSDF):
         """In scalar variants, read constant parameters once: α (and Mitsuba's sampler for it),
         and in RGB ks, η and k as per-channel floats (see _common.variant_tools)."""
         self._alpha_const = self._distr = self._channels = None
+        self._ks_channels = self._kt_channels = None
         if self.m_transmission:  # the relative index both ways (opaque: updates reuse kernels)
             self._eta, self._inv_eta = self.m_eta, dr.rcp(self.m_eta)
             if V.jit:
                 dr.make_opaque(self._eta, self._inv_eta)
             else:
                 self._eta, self._inv_eta = float(self._eta), float(self._inv_eta)
+                if V.per_channel:  # constant ks and kt as per-channel floats
+                    self._ks_channels = _common.constant_channels(self.m_specular_reflectance)
+                    self._kt_channels = _common.constant_channels(
+                        self.m_specular_transmittance)
         if V.jit:
             return
         self._alpha_const = _common.constant_alpha(self.m_alpha_u, self.m_alpha_v)

@@ -128,7 +128,7 @@ class Ward(mi.BSDF):
     def sample(self, ctx, si, sample1, sample2, active=True):
         bs, sample2 = V.new_sample(), V.point2(sample2)
         has_diffuse, has_glossy = self._enabled(ctx)
-        wi = si.wi
+        wi = V.direction(si.wi)
         active = active & (wi.z > 0)  # one-sided: the local frame's z is cosθ
         if V.none(active) or not (has_diffuse or has_glossy):
             return bs, Spectrum(0.0)
@@ -143,14 +143,16 @@ class Ward(mi.BSDF):
         V.glossy_or_diffuse(bs, sample1, sample2, self._p_glossy, has_diffuse, has_glossy, glossy,
                             self._glossy, self._diffuse)
         # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
-        value, bs.pdf = self._eval_pdf(si, wi, bs.wo, active, has_diffuse, has_glossy, alpha)
+        value, bs.pdf = self._eval_pdf(si, wi, V.direction(bs.wo), active, has_diffuse,
+                                       has_glossy, alpha)
         return bs, V.weight(value, bs.pdf, active)
 
     def eval_pdf(self, ctx, si, wo, active=True):
         has_diffuse, has_glossy = self._enabled(ctx)
         if not (has_diffuse or has_glossy):
             return Spectrum(0.0), Float(0.0)
-        return self._eval_pdf(si, si.wi, V.vector(wo), active, has_diffuse, has_glossy)
+        return self._eval_pdf(si, V.direction(si.wi), V.direction(wo), active, has_diffuse,
+                              has_glossy)
 
     def _eval_pdf(self, si, wi, wo, active, has_diffuse, has_glossy, alpha=None):
         """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the enabled lobes."""

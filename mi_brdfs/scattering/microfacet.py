@@ -1,8 +1,8 @@
 r"""
-Microfacet terms for Beckmann and GGX surfaces, isotropic and anisotropic: the distribution D, Smith's masking
-(exactly, and as Mitsuba's ``microfacet.h`` computes it), the V-cavity masking of Cook & Torrance,
-the sampling of microfacet normals (by D·cosθ and by the distribution of visible normals) and
-the densities that go with them.
+Microfacet terms for Beckmann and GGX surfaces, isotropic and anisotropic: the distribution D,
+Smith's masking (exactly, and as Mitsuba's ``microfacet.h`` computes it), the V-cavity masking
+of Cook & Torrance, the sampling of microfacet normals (by D·cosθ and by the distribution of
+visible normals) and the densities that go with them.
 
 Conventions (Walter et al. 2007, "Microfacet Models for Refraction through Rough Surfaces"):
 directions are unit vectors in the local frame, pointing away from the surface; ``m`` is a
@@ -32,8 +32,9 @@ G1(v, m) = min(1, 2 (n·m)(n·v) / (v·m)) and G = min(G1(ωi), G1(ωo)).
 (the surface's tangent and bitangent). Then tan²θm/α² becomes (mx²/αu² + my²/αv²)/mz², πα²
 becomes π αu αv, and α² tan²θv in Λ becomes ((αu vx)² + (αv vy)²)/vz² (Heitz 2014,
 "Understanding the Masking-Shadowing Function", on anisotropic distributions: the anisotropic
-slope distribution is the isotropic one of unit roughness, stretched by αu and αv). A plain α (a number or ``Float``) is the isotropic case;
-D and Λ compute it with the same operations as the pair (α, α).
+slope distribution is the isotropic one of unit roughness, stretched by αu and αv). A plain α
+(a number or ``Float``) is the isotropic case; D and Λ compute it with the same operations as
+the pair (α, α).
 
 All functions take ``kind`` ('beckmann' or 'ggx') as a plain string (configuration, not data)
 and α already clamped to :data:`ALPHA_MIN`.
@@ -44,7 +45,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .vector import dot
+from .vector import dot, mitsuba_vector
 
 BECKMANN, GGX = "beckmann", "ggx"
 DISTRIBUTIONS = (BECKMANN, GGX)
@@ -196,7 +197,7 @@ def sample_visible(kind: str, alpha, wi, u, distr=None):
     own exact sampler (Jakob's numerical inversion for Beckmann, Heitz 2018 for GGX), the one
     ``roughconductor`` uses; ``distr`` is :func:`distribution` (kind, α) when it is at hand.
     """
-    return (distr or distribution(kind, alpha)).sample(wi, u)[0]
+    return (distr or distribution(kind, alpha)).sample(mitsuba_vector(wi), u)[0]
 
 
 def sample_vcavity_visible(kind: str, alpha, wi, u, u_facet):

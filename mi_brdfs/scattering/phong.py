@@ -41,8 +41,8 @@ original    1         1                          2π/(n+1)  8π(1−2^−(n+2)/2
 
 The halfway normalisation (Giesen 2009, "Derivation of Phong and Blinn-Phong BRDF normalization
 factors") follows from ωi = N, θh = θo/2: ∫ cosⁿ(θo/2) cosθo dωo = 8π ∫_{1/√2}^1 u^(n+1)(2u² − 1) du
-= 8π(n + 2^(−n/2)) / ((n+2)(n+4)). ``tests/reference/test_phong_reference.py`` checks every entry of the
-table by quadrature.
+= 8π(n + 2^(−n/2)) / ((n+2)(n+4)). ``tests/reference/test_phong_reference.py`` checks every
+entry of the table by quadrature.
 """
 
 from __future__ import annotations

@@ -6,7 +6,8 @@ In float32, ``log(1 + x)`` loses all precision for |x| below 6e-8 (1 + x rounds 
 scientist should know about floating-point arithmetic", 1991, Theorem 4): the rounding error of
 u = 1 + x (resp. u = eˣ) cancels between numerator and denominator. Measured in ``llvm_ad_rgb``
 against NumPy's float64 functions: relative error at most 1.6e-7 for ``log1p`` on [1e-12, 0.98]
-and 2.1e-7 for ``expm1`` on [−32, −1e-12] (``tests/scattering/test_phong_lobes.py::test01_log1p_expm1_accuracy``).
+and 2.1e-7 for ``expm1`` on [−32, −1e-12]
+(``tests/scattering/test_phong_lobes.py::test01_log1p_expm1_accuracy``).
 
 Every division has a safe denominator: scalar variants compute with Python floats, which raise
 ``ZeroDivisionError`` even in a branch that ``dr.select`` then discards (and masks are Python

@@ -13,6 +13,12 @@ import drjit as dr
 import mitsuba as mi
 
 
+def mitsuba_vector(v):
+    """``v`` for Mitsuba's own functions: itself (the terms compiled for Python floats build
+    their own vector type, and convert it here: :data:`mi_brdfs.scattering.floats.OVERRIDES`)."""
+    return v
+
+
 def dot(a, b):
     """a·b, rounded as ``dr.dot`` rounds it."""
     return dr.fma(a.z, b.z, dr.fma(a.y, b.y, a.x * b.x))
