@@ -181,6 +181,38 @@ def _parser() -> argparse.ArgumentParser:
                     help="figure (default ./compare.png); EXRs beside it")
     cp.set_defaults(func=cmd_compare)
 
+    ft = sub.add_parser("fit", help="fit a model's parameters to another BSDF (JSON, plot)",
+                        description="Fit the continuous parameters of MODEL (those of --free, "
+                                    "default all) so that its f·cosθo matches TARGET's over "
+                                    "direction pairs covering the hemisphere and grazing angles, "
+                                    "by automatic differentiation (Adam, cube-root objective; see "
+                                    "mi_brdfs.fit). Prints the fitted values, the residual, the "
+                                    "albedo error and the fitted BSDF as a command line and XML.")
+    ft.add_argument("target", nargs="+", metavar="TARGET",
+                    help="the BSDF to match: a plugin name followed by its key=value parameters "
+                         "(e.g. cooktorrance material=Au alpha=0.2), a built-in, an XML file or "
+                         "a quoted XML fragment")
+    ft.add_argument("--model", nargs="+", required=True, metavar="MODEL",
+                    help="the model to fit: a plugin name with key=value parameters (its values "
+                         "are the start; those not in --free stay fixed), e.g. --model phong "
+                         "lobe=halfway diffuse_reflectance=0")
+    ft.add_argument("--free", metavar="P1,P2,...",
+                    help="the parameters to fit, by name (default: all of MODEL's continuous ones)")
+    ft.add_argument("-o", "--output", metavar="FIT.json", type=_output(".json"),
+                    help="write the result as JSON")
+    ft.add_argument("--plot", metavar="FIT.png", type=_output(".png", ".pdf", ".svg"),
+                    help="plot target against fit: lobes in the plane of incidence and E(θ)")
+    ft.add_argument("--variant", metavar="V", default="llvm_ad_rgb",
+                    help="Mitsuba variant with automatic differentiation (default: llvm_ad_rgb)")
+    ft.add_argument("--pairs", type=_count, default=16384, metavar="N",
+                    help="direction pairs drawn (default 16384; about 3/4 lie above the horizon)")
+    ft.add_argument("--steps", type=_count, default=800, metavar="N",
+                    help="Adam steps per start (default 800)")
+    ft.add_argument("--seed", type=_seed, default=0, metavar="S",
+                    help="seed of the direction pairs (default: 0)")
+    ft.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    ft.set_defaults(func=cmd_fit)
+
     def report_command(name, summary, description, quick, target, tag):
         """A subcommand that writes a report into --out (and quotes into --readme)."""
         cmd = sub.add_parser(name, help=summary, description=description)
@@ -370,6 +402,56 @@ def cmd_compare(args) -> int:
         print(f"note: {note}")
     print("wrote " + ", ".join(written))
     return 0
+
+
+def _spec_tokens(tokens) -> list:
+    """Command-line BSDF tokens, a quoted 'plugin key=value ...' split into its words."""
+    import shlex
+
+    words = []
+    for token in tokens:
+        words += [token] if token.lstrip().startswith("<") else shlex.split(token)
+    return words
+
+
+def cmd_fit(args) -> int:
+    import mi_brdfs
+    from .bsdfspec import parse_cli
+    from .errors import MiBrdfsError
+    from .fit import fit, plot_fit, write_json
+    from .imageio import check_writable
+
+    json_path = check_writable(args.output) if args.output else None
+    plot_path = check_writable(args.plot) if args.plot else None
+    if plot_path:
+        from .plots import pyplot
+        pyplot()  # matplotlib missing: say so before the fit
+    try:
+        target_tokens, model_tokens = _spec_tokens(args.target), _spec_tokens(args.model)
+    except ValueError as e:
+        raise MiBrdfsError(f"cannot read the BSDF: {e}") from None
+    mi_brdfs.use_variant(args.variant, fallback=False)
+    (target,), (model,) = _one_bsdf(parse_cli(target_tokens), "TARGET"), \
+        _one_bsdf(parse_cli(model_tokens), "--model")
+    result = fit(target, model, args.free, pairs=args.pairs, steps=args.steps, seed=args.seed,
+                 variant=args.variant, progress=not args.quiet)
+    print(result.summary())
+    written = []
+    if json_path:
+        written.append(write_json(result, json_path))
+    if plot_path:
+        written.append(plot_fit(result, plot_path))
+    if written:
+        print("wrote " + " and ".join(written))
+    return 0
+
+
+def _one_bsdf(specs: list, what: str) -> list:
+    from .errors import MiBrdfsError
+
+    if len(specs) != 1:
+        raise MiBrdfsError(f"{what} names {len(specs)} BSDFs; give one")
+    return specs
 
 
 def _report_folder(args, filename: str) -> Path:
