@@ -13,7 +13,7 @@ SPP    ?= 64
 RES    ?= 256
 PYTEST_ARGS ?=
 
-.PHONY: all setup system render test bench validate figures clean distclean
+.PHONY: all setup system render test bench validate audit figures clean distclean
 
 all: test
 
@@ -47,6 +47,11 @@ bench: $(STAMP)
 # The validation campaign: validation/REPORT.md and validation/figures/ (about 3 min)
 validate: $(STAMP)
 	$(VENV)/bin/mi-brdfs validate --out validation --readme README.md
+
+# The audit of every BSDF Mitsuba ships: validation/MITSUBA_AUDIT.md and validation/audit/
+# (about 5 min on 2 cores; resumable: results are cached in validation/audit/.cache)
+audit: $(STAMP)
+	$(VENV)/bin/mi-brdfs audit --out validation
 
 # The README's figures
 figures: $(STAMP)

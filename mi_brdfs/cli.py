@@ -241,6 +241,30 @@ def _parser() -> argparse.ArgumentParser:
                        "make bench", "bench")
     b.set_defaults(func=cmd_bench)
 
+    au = sub.add_parser(
+        "audit", help="every BSDF Mitsuba ships through the checks: MITSUBA_AUDIT.md",
+        description="Run every BSDF plugin of the installed Mitsuba (and the package's) over a "
+                    "grid of configurations through the whole battery of checks and Mitsuba's "
+                    "own χ² harness, in worker processes, and write MITSUBA_AUDIT.md and "
+                    "audit/findings.json with a triaged verdict for every failure. Results are "
+                    "cached per case in OUT/audit/.cache: an interrupted audit resumes. Exit "
+                    "status 1 when a failure has no verdict yet.")
+    au.add_argument("--quick", action="store_true",
+                    help="a few configurations, 10× fewer samples (the test suite's run; writes "
+                         "MITSUBA_AUDIT-quick.md)")
+    au.add_argument("--out", metavar="DIR", default=".",
+                    help="report folder (default: the current directory; make audit: "
+                         "validation)")
+    au.add_argument("--variant", metavar="V", default="llvm_ad_rgb",
+                    help="JIT variant of the audit (default llvm_ad_rgb; polarized BSDFs run in "
+                         "llvm_ad_spectral_polarized)")
+    au.add_argument("--processes", type=_count, default=None, metavar="N",
+                    help="worker processes (default: one per core)")
+    au.add_argument("--only", metavar="BSDF[,BSDF]",
+                    help="audit only these plugins (by name as in XML)")
+    au.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    au.set_defaults(func=cmd_audit)
+
     i = sub.add_parser("info", help="versions, variants, LLVM status and registered plugins")
     i.set_defaults(func=cmd_info)
     return parser
@@ -511,6 +535,42 @@ def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) 
         count = fill_quotes(readme, values, quotes)
         print(f"updated {readme}: {count} figures quoted from {report.name}")
     return failed
+
+
+def cmd_audit(args) -> int:
+    import os
+    import time
+
+    from .audit import grid, report, run
+    from .errors import MiBrdfsError
+    from .registry import use_variant
+
+    if not args.variant.startswith(("llvm_", "cuda_")):
+        raise MiBrdfsError(f"--variant {args.variant}: the audit needs a JIT variant (χ² runs "
+                           f"on mitsuba.chi2), e.g. llvm_ad_rgb")
+    out = _report_folder(args, "MITSUBA_AUDIT.md")
+    use_variant(args.variant, fallback=False)  # fail here, in one line, if it is unusable
+    cases = grid.all_cases()
+    if args.quick:
+        cases = [c for c in cases if c.quick]
+    if args.only:
+        names = {n.strip() for n in args.only.split(",") if n.strip()}
+        unknown = names - {c.bsdf for c in grid.all_cases()}
+        if unknown:
+            raise MiBrdfsError(f"--only {args.only}: no audit configuration for "
+                               f"{', '.join(sorted(unknown))} (the audit knows: "
+                               f"{', '.join(sorted({c.bsdf for c in grid.all_cases()}))})")
+        cases = [c for c in cases if c.bsdf in names]
+    t0 = time.perf_counter()
+    records = run.run(cases, args.variant, args.quick, out / "audit" / ".cache",
+                      processes=args.processes or min(os.cpu_count() or 1, 4),
+                      progress=not args.quiet)
+    command = "mi-brdfs audit" + (" --quick" if args.quick else "") + \
+        (f" --only {args.only}" if args.only else "")
+    md, js, counts = report.write(records, out, command, time.perf_counter() - t0,
+                                  args.variant, args.quick)
+    print(f"wrote {md} and {js}: " + ", ".join(f"{n} {v}" for v, n in sorted(counts.items())))
+    return 1 if counts.get("untriaged") else 0
 
 
 def cmd_validate(args) -> int:

@@ -87,11 +87,14 @@ def energy_and_reciprocity(ctx: Context, s: Section) -> str:
             symmetric = form != "original"
             s.rows.append(Row.of(f"phong {form} {lobe} (n = 1)", energy, "energy ≤ 1",
                                  expected_fail=gains))
-            s.rows.append(Row.of(f"phong {form} {lobe}", recip, "reciprocity",
-                                 expected_fail=not symmetric))
+            # (original declares NonSymmetric: the check passes it as not reciprocal, expected)
+            s.rows.append(Row.of(f"phong {form} {lobe}", recip, "reciprocity"))
+            s.rows.append(Row(f"phong {form} {lobe}", "reciprocal", f"{recip.value:.3g}",
+                              "yes" if symmetric else "no",
+                              recip.details["reciprocal"] == symmetric))
             rows.append((form, lobe, f"{energy.value:.4f}", "gains energy" if not energy.passed
                          else "≤ 1", f"{recip.value:.3g}",
-                         "reciprocal" if recip.passed else "not reciprocal"))
+                         "reciprocal" if recip.details["reciprocal"] else "not reciprocal"))
     return md_table(["form", "lobe", "max E(θ), n = 1, ks = 1", "energy", "max asymmetry",
                      "reciprocity"], rows)
 

@@ -12,6 +12,8 @@ check                      what it establishes
 ``check_consistency``      weight = eval/pdf, bs.pdf = pdf(bs.wo), eval_pdf = (eval, pdf), flags
 ``check_energy``           directional albedo E(θ) ≤ 1 at every incident angle
 ``check_albedo_agreement`` E(θ) from ``sample()`` = E(θ) from ``eval()`` (reference or quadrature)
+``check_lobes``            ctx.component selects one lobe; the lobes add up to the whole (eval, E)
+``check_pdf_integral``     ∫ pdf dω over the sphere = the fraction of samples that succeed
 ``check_reciprocity``      f(a, b) = f(b, a), and where it fails most
 ``check_positivity``       eval ≥ 0, pdf ≥ 0 everywhere on the sphere
 ``check_stability``        no NaN/Inf/negative at stress directions × parameter extremes
@@ -34,6 +36,7 @@ from .albedo import (
 from .battery import format_table, run_battery
 from .consistency import check_consistency
 from .furnace import FurnaceRender, check_furnace, furnace_render
+from .lobes import check_lobes, check_pdf_integral
 from .microfacet import (
                      check_ndf,
                      check_weak_furnace,
@@ -56,5 +59,6 @@ __all__ = [
     "sweep_one", "check_furnace", "furnace_render", "FurnaceRender", "check_ndf",
     "check_weak_furnace", "ndf_normalization", "weak_white_furnace", "mitsuba_terms",
     "package_terms",
-    "run_battery", "format_table", "check_equal", "eval_precision",
+    "run_battery", "format_table", "check_equal", "eval_precision", "check_lobes",
+    "check_pdf_integral",
 ]

@@ -66,8 +66,15 @@ def interaction(wi, n: int | None = None, uv=(0.5, 0.5)):
         si.wi = mi.Vector3f(*[float(x) for x in np.ravel(wi)[:3]])
     uv = np.asarray(uv, dtype=np.float32)
     si.uv = mi.Point2f(*(mi.Float(c) if is_jit() else float(c) for c in uv.T))
+    # the geometry of a flat surface at the origin, parametrised by uv along x and y: wrappers
+    # that perturb the frame (bumpmap, normalmap) need the tangents, and a zero dp_du
+    # degenerates their frame into NaN or zero vectors
+    si.p = mi.Point3f(0, 0, 0)
+    si.t = 1.0
     si.n = mi.Vector3f(0, 0, 1)
     si.sh_frame = mi.Frame3f(mi.Vector3f(0, 0, 1))
+    si.dp_du, si.dp_dv = mi.Vector3f(1, 0, 0), mi.Vector3f(0, 1, 0)
+    si.dn_du = si.dn_dv = mi.Vector3f(0, 0, 0)
     if mi.is_spectral:  # (UnpolarizedSpectrum: in polarized variants Spectrum is a Mueller matrix)
         si.wavelengths = mi.UnpolarizedSpectrum(WAVELENGTHS) if not is_jit() else \
             dr.zeros(mi.UnpolarizedSpectrum, n or 1) + mi.UnpolarizedSpectrum(WAVELENGTHS)

@@ -15,6 +15,7 @@ from . import batch
 from .albedo import albedo_curve, check_albedo_agreement, check_energy
 from .consistency import check_consistency
 from .furnace import check_furnace
+from .lobes import check_lobes, check_pdf_integral
 from .reciprocity import check_positivity, check_reciprocity
 from .result import CheckResult
 from .sampling import chi2_bsdf
@@ -29,7 +30,8 @@ def run_battery(spec, quick: bool = False, render: bool = False, chi2_res: int |
     """
     Every check on one BSDF (given as a dict, XML fragment or ``'type key=value'`` string), in
     the current variant: consistency, χ² sampling at normal, 45° and grazing incidence (JIT
-    variants), energy conservation and the sample()/eval() albedo agreement, reciprocity,
+    variants), energy conservation and the sample()/eval() albedo agreement, the lobes (context
+    selection, additivity, ∫ pdf = the fraction of samples that succeed), reciprocity,
     positivity, the stability sweep at these parameters, and with ``render`` the furnace render.
     ``quick`` uses 10× fewer samples. χ² chooses its resolution from the lobe's sharpness
     (:func:`~mi_brdfs.checks.sampling.chi2_settings`, at least 8×8 points per cell: with
@@ -60,7 +62,15 @@ def run_battery(spec, quick: bool = False, render: bool = False, chi2_res: int |
                      else check_albedo_agreement(spec, curve=curve))
         return [check_energy(spec, curve=curve), agreement]
 
-    steps += [("albedo", albedo_checks),
+    def lobe_checks():
+        lobes = check_lobes(spec, n=n // 5 if jit else n // 4)
+        if not jit:
+            return [lobes, CheckResult("pdf integral", True, math.nan, "n/a",
+                                       "pdf integral: skipped (a sphere quadrature of pdf() "
+                                       "takes minutes in a scalar variant)", skipped=True)]
+        return [lobes, check_pdf_integral(spec, n=n // 2)]
+
+    steps += [("albedo", albedo_checks), ("lobes", lobe_checks),
               ("reciprocity", lambda: [check_reciprocity(spec, n=n // 5 if jit else n // 10)]),
               ("positivity", lambda: [check_positivity(spec, n=n // 5 if jit else n // 10)]),
               ("stability", lambda: [check_stability(spec)])]

@@ -45,7 +45,7 @@ def _apply(R, v):
                        r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z)
 
 
-def bsdf_adapter(bsdf, wi, ctx=None, rotation=None):
+def bsdf_adapter(bsdf, wi, ctx=None, rotation=None, delta_failed=False):
     """
     ``(sample_func, pdf_func)`` for ``mi.chi2.ChiSquareTest`` on a loaded BSDF.
 
@@ -58,6 +58,11 @@ def bsdf_adapter(bsdf, wi, ctx=None, rotation=None):
     Parameter ``rotation`` (3×3 | None): the histogram is made of R·ωo and the pdf evaluated at
     Rᵀ·ω; a rotation preserves solid angle, so the densities are unchanged (see
     :func:`rotation_to_equator`).
+
+    Parameter ``delta_failed`` (bool): count samples of a Dirac lobe as failed. With every lobe
+    enabled, the histogram then holds the smooth lobes' samples, whose mass is the probability
+    of choosing them, and ``pdf()`` (which reports the smooth lobes times that probability)
+    must match it: the lobe-selection weights are tested too.
     """
     ctx = ctx or mi.BSDFContext()
     R = np.eye(3) if rotation is None else np.asarray(rotation, dtype=np.float64)
@@ -66,6 +71,8 @@ def bsdf_adapter(bsdf, wi, ctx=None, rotation=None):
         si = batch.interaction(wi, dr.width(sample))
         bs, weight = bsdf.sample(ctx, si, sample[0], mi.Point2f(sample[1], sample[2]))
         ok = dr.any(mi.unpolarized_spectrum(weight) != 0)
+        if delta_failed:
+            ok &= (bs.sampled_type & mi.UInt32(int(mi.BSDFFlags.Delta))) == 0
         wo = dr.select(ok, bs.wo, mi.Vector3f(0, 0, 1))
         return _apply(R, wo), dr.select(ok, mi.Float(1.0), mi.Float(0.0))
 
@@ -188,16 +195,18 @@ def chi2_bsdf(bsdf, wi=(0.0, 0.0, 1.0), ctx=None, res: int | None = 101, ires: i
     wi = wi / np.linalg.norm(wi)
     where = f"{describe(bsdf)} at wi=({wi[0]:.3f}, {wi[1]:.3f}, {wi[2]:.3f})"
     flags, delta = int(obj.flags()), int(mi.BSDFFlags.Delta)
-    note = ""
+    note, delta_failed = "", False
     if ctx is None and flags & delta:
-        # Dirac lobes have pdf() = 0 by convention: χ² can only judge the other lobes.
+        # Dirac lobes have pdf() = 0 by convention: χ² judges the other lobes, sampled with
+        # every lobe enabled and Dirac samples counted as failed, so that the probability of
+        # choosing the smooth lobes is tested too (restricting the context to them would not).
         smooth = flags & int(mi.BSDFFlags.All) & ~delta
         if not smooth & int(mi.BSDFFlags.Smooth):
             return CheckResult("chi2", True, float("nan"), "n/a",
                                f"χ²: {where}: not applicable (only Dirac delta lobes)",
                                skipped=True)
-        ctx = mi.BSDFContext(mi.TransportMode.Radiance, smooth)
-        note = " (non-delta lobes only)"
+        delta_failed = True
+        note = " (Dirac samples counted as failed)"
     if rotate or res is None or ires is None:  # the pilot samples are needed
         auto_res, auto_ires, pdf_max, lobe = chi2_settings(obj, wi, ctx)
         res, ires = res or auto_res, ires or auto_ires
@@ -210,7 +219,7 @@ def chi2_bsdf(bsdf, wi=(0.0, 0.0, 1.0), ctx=None, res: int | None = 101, ires: i
     rotate = rotate and pdf_max >= RESOLUTIONS[0][0] and abs(lobe_dir[2]) > math.cos(
         math.radians(POLAR_DEG))
     rotation = rotation_to_equator(lobe) if rotate else None
-    sample_func, pdf_func = bsdf_adapter(obj, wi, ctx, rotation)
+    sample_func, pdf_func = bsdf_adapter(obj, wi, ctx, rotation, delta_failed)
     test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func, pdf_func=pdf_func,
                          sample_dim=3, sample_count=sample_count, res=res, ires=ires, seed=seed)
     passed = bool(test.run(significance_level=significance, test_count=test_count, quiet=True))

@@ -1,0 +1,189 @@
+"""
+What the audit runs: every BSDF plugin of the installed Mitsuba that can be built standalone, and
+the package's own, each over a small grid of configurations (defaults, rough and smooth, GGX and
+Beckmann, both samplers, anisotropic, textured where it matters, nested in wrappers).
+
+A configuration is a ``mi.load_dict`` dict, built in the variant that runs it (textures and
+bitmaps are made there). Polarized BSDFs run in a polarized variant (:data:`POLARIZED_VARIANT`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+#: The variant of the polarized BSDFs (the audit's own variant for the others).
+POLARIZED_VARIANT = "llvm_ad_spectral_polarized"
+
+
+@dataclass(frozen=True)
+class Case:
+    """One BSDF configuration of the audit."""
+
+    bsdf: str                # the plugin name as in XML (of the outermost BSDF)
+    config: str              # a short label, unique per bsdf ("default", "ggx α=0.05", ...)
+    spec: tuple              # the load_dict dict, as sorted items (hashable); see :meth:`dict`
+    polarized: bool = False  # run in POLARIZED_VARIANT
+    quick: bool = False      # part of `mi-brdfs audit --quick`
+    tags: tuple = field(default=())
+
+    @property
+    def key(self) -> str:
+        return f"{self.bsdf} | {self.config}"
+
+    def dict(self) -> dict:
+        return _thaw(self.spec)
+
+
+def _freeze(value):
+    if isinstance(value, dict):
+        return tuple(sorted((k, _freeze(v)) for k, v in value.items()))
+    if isinstance(value, list):
+        return ("__list__", tuple(_freeze(v) for v in value))
+    return value
+
+
+def _thaw(value):
+    if isinstance(value, tuple) and value and value[0] == "__list__":
+        return [_thaw(v) for v in value[1]]
+    if isinstance(value, tuple):
+        return {k: _thaw(v) for k, v in value}
+    return value
+
+
+def case(bsdf: str, config: str, spec: dict, **kw) -> Case:
+    return Case(bsdf, config, _freeze(spec), **kw)
+
+
+def _checker(a=0.2, b=0.8) -> dict:
+    """A checkerboard texture (spatially varying: the uv of the check's interactions matter)."""
+    return {"type": "checkerboard", "color0": {"type": "rgb", "value": [a] * 3},
+            "color1": {"type": "rgb", "value": [b] * 3}}
+
+
+def _normal_map() -> dict:
+    """A small bitmap of tilted normals, encoded as normalmap expects (n·0.5 + 0.5)."""
+    return {"type": "bitmap", "raw": True, "filter_type": "bilinear",
+            "bitmap": "__normal_map__"}
+
+
+def _height_map() -> dict:
+    return {"type": "bitmap", "raw": True, "filter_type": "bilinear", "bitmap": "__height_map__"}
+
+
+RC = {"type": "roughconductor"}
+RD = {"type": "roughdielectric"}
+
+
+def mitsuba_cases() -> list[Case]:
+    """The grid of Mitsuba's built-in BSDFs."""
+    c = []
+    c += [case("diffuse", "default", {"type": "diffuse"}, quick=True),
+          case("diffuse", "textured reflectance", {"type": "diffuse", "reflectance": _checker()})]
+    c += [case("conductor", "default (η = 0, k = 1)", {"type": "conductor"}),
+          case("conductor", "Au", {"type": "conductor", "material": "Au"})]
+    for dist in ("beckmann", "ggx"):
+        for a in (0.05, 0.3):
+            c.append(case("roughconductor", f"{dist} α={a} Au",
+                          dict(RC, distribution=dist, alpha=a, material="Au"),
+                          quick=(dist, a) == ("ggx", 0.3)))
+        c.append(case("roughconductor", f"{dist} α=0.3 sample_visible=false",
+                      dict(RC, distribution=dist, alpha=0.3, sample_visible=False)))
+        c.append(case("roughconductor", f"{dist} αu=0.05 αv=0.3",
+                      dict(RC, distribution=dist, alpha_u=0.05, alpha_v=0.3)))
+    c += [case("dielectric", "default (bk7/air)", {"type": "dielectric"}),
+          case("dielectric", "water", {"type": "dielectric", "int_ior": "water"})]
+    c += [case("thindielectric", "default", {"type": "thindielectric"})]
+    for dist in ("beckmann", "ggx"):
+        for a in (0.05, 0.3):
+            c.append(case("roughdielectric", f"{dist} α={a}",
+                          dict(RD, distribution=dist, alpha=a),
+                          quick=(dist, a) == ("ggx", 0.05)))
+        c.append(case("roughdielectric", f"{dist} α=0.3 sample_visible=false",
+                      dict(RD, distribution=dist, alpha=0.3, sample_visible=False)))
+        c.append(case("roughdielectric", f"{dist} αu=0.05 αv=0.3",
+                      dict(RD, distribution=dist, alpha_u=0.05, alpha_v=0.3)))
+    c += [case("plastic", "default", {"type": "plastic"}),
+          case("plastic", "nonlinear", {"type": "plastic", "nonlinear": True})]
+    c += [case("roughplastic", "default (beckmann α=0.1)", {"type": "roughplastic"}),
+          case("roughplastic", "ggx α=0.5", {"type": "roughplastic", "distribution": "ggx",
+                                            "alpha": 0.5}, quick=True),
+          case("roughplastic", "beckmann α=0.3 nonlinear",
+               {"type": "roughplastic", "alpha": 0.3, "nonlinear": True})]
+    c += [case("principled", "default", {"type": "principled"}),
+          case("principled", "roughness=0.1", {"type": "principled", "roughness": 0.1},
+               quick=True),
+          case("principled", "metallic=1 roughness=0.3",
+               {"type": "principled", "metallic": 1.0, "roughness": 0.3}),
+          case("principled", "anisotropic=0.8", {"type": "principled", "anisotropic": 0.8}),
+          case("principled", "clearcoat=1 sheen=1",
+               {"type": "principled", "clearcoat": 1.0, "sheen": 1.0}),
+          case("principled", "spec_trans=0.7 roughness=0.3",
+               {"type": "principled", "spec_trans": 0.7, "roughness": 0.3})]
+    c += [case("principledthin", "default", {"type": "principledthin"}),
+          case("principledthin", "roughness=0.1 diff_trans=0.5",
+               {"type": "principledthin", "roughness": 0.1, "diff_trans": 0.5})]
+    c += [case("hair", "default", {"type": "hair"}, quick=True)]
+    c += [case("blendbsdf", "diffuse + roughconductor, weight 0.3",
+               {"type": "blendbsdf", "weight": 0.3, "a": {"type": "diffuse"},
+                "b": dict(RC, alpha=0.2)}),
+          case("blendbsdf", "textured weight", {"type": "blendbsdf", "weight": _checker(),
+                                                "a": {"type": "diffuse"},
+                                                "b": {"type": "conductor"}})]
+    c += [case("twosided", "diffuse", {"type": "twosided", "bsdf": {"type": "diffuse"}}),
+          case("twosided", "roughconductor α=0.3",
+               {"type": "twosided", "bsdf": dict(RC, alpha=0.3)})]
+    c += [case("mask", "opacity 0.4 on diffuse",
+               {"type": "mask", "opacity": 0.4, "bsdf": {"type": "diffuse"}})]
+    c += [case("bumpmap", "on roughconductor α=0.3",
+               {"type": "bumpmap", "texture": _height_map(), "scale": 0.5,
+                "bsdf": dict(RC, alpha=0.3)}),
+          case("normalmap", "on diffuse", {"type": "normalmap", "normalmap": _normal_map(),
+                                           "bsdf": {"type": "diffuse"}}),
+          case("normalmap", "on roughconductor αu=0.05 αv=0.3 (upstream's)",
+               {"type": "normalmap", "normalmap": _normal_map(),
+                "bsdf": dict(RC, alpha_u=0.05, alpha_v=0.3)})]
+    c += [case("null", "default", {"type": "null"})]
+    c += [case("pplastic", "default", {"type": "pplastic"}, polarized=True),
+          case("polarizer", "default", {"type": "polarizer"}, polarized=True),
+          case("retarder", "default", {"type": "retarder"}, polarized=True),
+          case("circular", "default", {"type": "circular"}, polarized=True),
+          case("roughconductor", "ggx α=0.3 (polarized variant)",
+               dict(RC, distribution="ggx", alpha=0.3), polarized=True),
+          case("roughdielectric", "ggx α=0.3 (polarized variant)",
+               dict(RD, distribution="ggx", alpha=0.3), polarized=True)]
+    return c
+
+
+def package_cases() -> list[Case]:
+    """The package's own plugins."""
+    ct = {"type": "cooktorrance"}
+    return [
+        case("lambert", "default", {"type": "lambert"}, quick=True),
+        case("phong", "lecture", {"type": "phong", "form": "lecture"}),
+        case("phong", "normalized, halfway", {"type": "phong", "form": "normalized",
+                                              "lobe": "halfway"}),
+        case("phong", "original (not reciprocal)", {"type": "phong", "form": "original"}),
+        case("cooktorrance", "default (V-cavity, Cu)", ct, quick=True),
+        case("cooktorrance", "smith ggx α=0.3", dict(ct, shadowing="smith",
+                                                     distribution="ggx", alpha=0.3)),
+        case("cooktorrance", "αu=0.05 αv=0.3 smith", dict(ct, shadowing="smith", alpha_u=0.05,
+                                                          alpha_v=0.3)),
+        case("cooktorrance", "diffuse base", dict(ct, diffuse_reflectance=0.5)),
+        case("cooktorrance", "transmission α=0.3", dict(ct, transmission=True, alpha=0.3)),
+        case("ward", "default (balanced)", {"type": "ward"}),
+        case("ward", "original αu=0.1 αv=0.4", {"type": "ward", "form": "original",
+                                                "alpha_u": 0.1, "alpha_v": 0.4}),
+        case("orennayar", "full σ=0.5", {"type": "orennayar", "form": "full", "sigma": 0.5}),
+    ]
+
+
+def all_cases() -> list[Case]:
+    return mitsuba_cases() + package_cases()
+
+
+#: BSDF plugins of Mitsuba 3 that the audit lists but cannot build standalone, and why.
+SKIPPED = {
+    "measured": "needs an RGL material file (https://rgl.epfl.ch/materials); none ships with "
+                "Mitsuba or this package",
+    "measured_polarized": "needs a measured pBRDF file (Baek et al. 2020); none ships",
+}
