@@ -1,0 +1,110 @@
+"""
+``mi-brdfs audit``: the triage table and report on synthetic records, the quick audit as a user
+runs it, and every reproducer of a Mitsuba defect exiting 1 on the Mitsuba it was written for.
+"""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import mitsuba as mi
+import pytest
+
+from conftest import LLVM_OK
+from mi_brdfs.audit import grid, report, triage
+from mi_brdfs.audit.triage import Finding
+
+ROOT = Path(__file__).resolve().parents[2]
+REPRODUCERS = sorted((ROOT / "validation" / "audit").glob("repro_*.py"))
+#: The Mitsuba version the reproducers were written against (they exit 0 once it is fixed).
+AUDITED = "3.9.1"
+KEYS = {"bsdf", "config", "check", "verdict", "summary", "reproducer", "source"}
+
+
+def _record(bsdf="roughplastic", config="ggx α=0.5", check="chi2 θ=0°", passed=False, **kw):
+    return {"bsdf": bsdf, "config": config, "check": check, "passed": passed,
+            "skipped": False, "value": 0.0, "tolerance": 0.01, "message": "m", "details": kw}
+
+
+def test01_verdicts():
+    """A passed check is 'pass'; a failure takes the first finding that covers it (by BSDF,
+    check and configuration patterns and an optional condition), else 'untriaged'."""
+    table = [Finding("roughplastic", r"^chi2", "ggx", "defect", "s", "r.py", "src"),
+             Finding("*", r"^mitsuba chi2", "", "check-limitation", "h",
+                     when=lambda r: r["details"].get("ours_passed") is True)]
+    assert triage.verdict(_record(passed=True), table)[0] == "pass"
+    assert triage.verdict(_record(), table)[0] == "defect"
+    assert triage.verdict(_record(config="beckmann"), table)[0] == "untriaged"
+    harness = _record(bsdf="diffuse", check="mitsuba chi2 θ=0°", ours_passed=True)
+    assert triage.verdict(harness, table)[0] == "check-limitation"
+    harness["details"]["ours_passed"] = False
+    assert triage.verdict(harness, table)[0] == "untriaged"
+    for f in triage.findings():
+        assert f.verdict in triage.VERDICTS[:-1] and f.summary
+        if f.verdict == "defect":
+            assert f.reproducer and (ROOT / f.reproducer).is_file() and f.source, f
+
+
+def test02_report(tmp_path):
+    records = [_record(passed=True, check="consistency"), _record(),
+               _record(check="mitsuba chi2 θ=0°", skipped=True)]
+    records[2]["skipped"] = True
+    table = [Finding("roughplastic", r"^chi2", "", "defect", "why", "validation/x.py", "a.cpp")]
+    md, js, counts = report.write(records, tmp_path, "mi-brdfs audit", 60.0, "llvm_ad_rgb",
+                                  quick=False, table=table)
+    items = json.loads(js.read_text())
+    assert [i["verdict"] for i in items] == ["pass", "defect"]  # skipped checks left out
+    assert all(set(i) == KEYS for i in items) and counts["defect"] == 1
+    text = md.read_text()
+    assert "**defect**" in text and "validation/x.py" in text and "a.cpp" in text
+
+
+def test03_grid_names_every_case_once():
+    keys = [c.key for c in grid.all_cases()]
+    assert len(keys) == len(set(keys)) and any(c.quick for c in grid.all_cases())
+    builtins = {c.bsdf for c in grid.mitsuba_cases()}
+    assert {"diffuse", "roughconductor", "roughdielectric", "roughplastic", "principled",
+            "hair", "blendbsdf", "normalmap", "bumpmap", "pplastic"} <= builtins
+
+
+@pytest.mark.skipif(not LLVM_OK, reason="no working libLLVM")
+def test04_quick_audit_as_a_user_runs_it(tmp_path):
+    """`mi-brdfs audit --quick`: every record of the quick grid gets a verdict (none
+    untriaged), roughplastic's defect among them; a second run resumes from the cache."""
+    env = dict(os.environ, MI_BRDFS_NO_PROGRESS="1")
+    cmd = [sys.executable, "-m", "mi_brdfs", "audit", "--quick", "--out", str(tmp_path),
+           "--processes", "2"]
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
+    assert p.returncode == 0, p.stdout + p.stderr
+    items = json.loads((tmp_path / "audit" / "findings-quick.json").read_text())
+    assert all(set(i) == KEYS and i["verdict"] in triage.VERDICTS for i in items)
+    assert any(i["bsdf"] == "roughplastic" and i["verdict"] == "defect" for i in items)
+    assert (tmp_path / "MITSUBA_AUDIT-quick.md").is_file()
+    cached = len(list((tmp_path / "audit" / ".cache").glob("*.json")))
+    assert cached == sum(c.quick for c in grid.all_cases())
+    p = subprocess.run(cmd + ["--only", "roughplastic"], capture_output=True, text=True,
+                       env=env, timeout=120)
+    assert p.returncode == 0 and "defect" in p.stdout, p.stdout + p.stderr
+
+
+def test05_bad_input_is_one_line(tmp_path):
+    env = dict(os.environ, MI_BRDFS_NO_PROGRESS="1")
+    for args in (["--only", "nosuchbsdf"], ["--variant", "scalar_rgb"]):
+        p = subprocess.run([sys.executable, "-m", "mi_brdfs", "audit", "--out", str(tmp_path),
+                            *args], capture_output=True, text=True, env=env, timeout=60)
+        assert p.returncode == 2 and p.stderr.count("\n") == 1, p.stderr
+        assert p.stderr.startswith("mi-brdfs: error: ")
+
+
+@pytest.mark.skipif(not LLVM_OK, reason="no working libLLVM")
+@pytest.mark.skipif(mi.__version__ != AUDITED, reason=f"reproducers target Mitsuba {AUDITED}")
+@pytest.mark.parametrize("script", REPRODUCERS, ids=lambda p: p.stem)
+def test06_each_reproducer_exits_1_while_the_defect_is_present(script):
+    """Standalone (mitsuba, drjit, numpy only) and failing on the audited Mitsuba."""
+    source = script.read_text()
+    assert "mi_brdfs" not in source
+    p = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                       timeout=300, cwd=script.parent)
+    assert p.returncode == 1, p.stdout[-2000:] + p.stderr[-2000:]
