@@ -13,7 +13,7 @@ SPP    ?= 64
 RES    ?= 256
 PYTEST_ARGS ?=
 
-.PHONY: all setup system render test bench validate audit figures clean distclean
+.PHONY: all setup system render test bench validate audit figures docs clean distclean
 
 all: test
 
@@ -58,6 +58,10 @@ figures: $(STAMP)
 	@mkdir -p $(OUT)
 	$(VENV)/bin/mi-brdfs render showcase -o $(OUT)/showcase-hq.exr --spp 256 -D res=320 -q
 	cp $(OUT)/showcase-hq.png docs/showcase.png
+
+# The plugin reference, docs/plugins/*.md, generated from the plugins' docstrings
+docs: $(STAMP)
+	$(PY) -m mi_brdfs.docgen
 
 clean:
 	rm -rf $(OUT) .pytest_cache

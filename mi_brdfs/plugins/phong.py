@@ -89,7 +89,7 @@ class Phong(mi.BSDF):
        -
 
     With L the direction towards the light, V towards the viewer, R the mirror image of L
-    and H = (L + V)/|L + V|:
+    and H = (L + V)/‖L + V‖:
 
     .. math::
 
