@@ -285,8 +285,8 @@ class CookTorrance(mi.BSDF):
     **Limits.** α is clamped to ≥ 10⁻⁴. The microfacet normals are sampled without the
     float32 collapse of the textbook formula (see
     :func:`mi_brdfs.scattering.microfacet.sample_ndf`), but below α ≈ 10⁻³ the lobe is
-    narrower than a χ² histogram resolves: there the plugin behaves as a smooth mirror whose albedo tends to F (measured in the
-    tests). Single scattering loses energy at high α and grazing angles (F = 1, V-cavity,
+    narrower than a χ² histogram resolves: there the plugin behaves as a smooth mirror whose
+    albedo tends to F (measured in the tests). Single scattering loses energy at high α and grazing angles (F = 1, V-cavity,
     α = 0.5: E = 0.89 at normal incidence); the diffuse base is added, not coupled, so
     ρd + E_spec ≤ 1 is up to the user.
 

@@ -88,7 +88,8 @@ class Lambert(mi.BSDF):
         return V.select(active, V.depolarize(value), 0.0), V.select(active, pdf, 0.0)
 
     def _rho(self, si, active):
-        """ρ at ``si``: per-channel floats when constant in a scalar RGB variant, else a spectrum."""
+        """ρ at ``si``: per-channel floats when constant in a scalar RGB variant, else a
+        spectrum."""
         return self._rho_channels or self.m_reflectance.eval(si, active)
 
     def _rho_over_pi(self, si, active):
