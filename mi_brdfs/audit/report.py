@@ -137,6 +137,12 @@ def write(records: list[dict], out: Path, command: str, seconds: float, variant:
                 lines.append(f"- Source: {f.source}")
             lines.append("- Records: " + "; ".join(sorted(set(by_finding[f]))[:12]))
             lines.append("")
+    lines += ["## Limitations of our checks that the audit exposed, and their fixes", "",
+              "| what the check got wrong | the fix | test (fails with the old check) |",
+              "|---|---|---|"]
+    lines += [f"| {what} | {fix} | `{path}::{test}` |"
+              for what, fix, (path, test) in triage.FIXED_LIMITATIONS]
+    lines.append("")
     untriaged = [r for r in records if not r.get("skipped") and
                  triage.verdict(r, table)[0] == "untriaged"]
     if untriaged:

@@ -138,12 +138,24 @@ def _leaves(d):
         yield d
 
 
+def _code_hash() -> str:
+    """A hash of the checks' and the audit runner's source: a cached result is reused only
+    while the code that produced it is unchanged."""
+    root = Path(__file__).resolve().parents[1]
+    files = sorted((root / "checks").glob("*.py")) + [root / "audit" / "run.py",
+                                                     root / "audit" / "build.py"]
+    h = hashlib.sha1()
+    for f in files:
+        h.update(f.read_bytes())
+    return h.hexdigest()[:12]
+
+
 def cache_key(case: grid.Case, variant: str, quick: bool) -> str:
     import mitsuba as mi
 
     from .. import __version__
     text = repr((case.bsdf, case.config, case.spec, case.polarized, variant, quick,
-                 mi.__version__, __version__))
+                 mi.__version__, __version__, _code_hash()))
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 

@@ -61,3 +61,56 @@ def verdict(record: dict, table=None) -> tuple[str, Finding | None]:
         if f.covers(record):
             return f.verdict, f
     return "untriaged", None
+
+
+#: Limitations of our own checks that the audit exposed, and how each was fixed: (what the check
+#: got wrong, the fix, (test file, test that the old check would fail)).
+FIXED_LIMITATIONS = [
+    ("bs.pdf vs pdf(bs.wo) judged with one relative tolerance: roughdielectric (α = 0.05) "
+     "differs by 0.4 % at cosθi ≈ 0.002, where the generalised half vector of a float32 "
+     "direction is that ill-conditioned",
+     "the tolerance follows how far pdf and eval/pdf move when one coordinate of either "
+     "direction moves by 8·2⁻²⁴, the rounding of a stored float32 direction "
+     "(checks.consistency.conditioning)",
+     ("tests/checks/test_checks.py",
+     "test06b_consistency_tolerance_follows_float32_conditioning")),
+    ("samples that failed (weight 0) were judged: roughconductor with sample_visible=false "
+     "returns negative bs.pdf there, which the API leaves undefined; and a BSDF none of whose "
+     "samples succeeded passed vacuously",
+     "only successful samples are judged; no successful sample at all is a failure",
+     ("tests/checks/test_checks.py",
+     "test06c_consistency_ignores_failed_samples_and_rejects_vacuity")),
+    ("reciprocity failed BSDFs that declare NonSymmetric (hair) and wrappers that replace the "
+     "shading frame (normalmap, bumpmap; Veach 1997, §5.3)",
+     "their asymmetry is measured and reported as expected",
+     ("tests/checks/test_checks.py",
+     "test13b_reciprocity_expected_where_declared_or_shading_frame")),
+    ("reciprocity judged with one relative tolerance at grazing pairs: pplastic loses "
+     "ε₃₂/cos² in one order of a pair (its exit transmittance from the refracted cosine)",
+     "a per-pair tolerance 1e-4 + 4·ε₃₂/min(cosθa, cosθb)²",
+     ("tests/checks/test_checks.py",
+     "test13c_reciprocity_tolerance_follows_float32_conditioning_near_grazing")),
+    ("the harness's surface had no tangents: bumpmap's perturbed frame degenerated (zero "
+     "directions, 'samples outside the domain')",
+     "checks.batch.interaction gives a flat surface with dp_du, dp_dv, p and t",
+     ("tests/checks/test_checks.py",
+     "test06d_bumpmap_needs_the_tangents_the_harness_gives")),
+    ("χ² of a BSDF with a Dirac lobe restricted the context to the smooth lobes: mask could "
+     "not be tested at all (expected frequency 0), and a wrong probability of choosing the "
+     "smooth lobe went unseen",
+     "every lobe enabled, Dirac samples counted as failed",
+     ("tests/checks/test_lobes.py",
+     "test06_chi2_tests_the_selection_of_a_smooth_lobe_beside_a_dirac_one")),
+    ("no check saw lobe selection, lobe additivity or the normalisation of pdf(), nor a pdf "
+     "that is not 0 across the surface of a BSDF that does not transmit",
+     "checks.lobes (ctx.component, additivity, ∫ pdf = fraction of successful samples) and "
+     "positivity's 'across the surface'",
+     ("tests/checks/test_lobes.py",
+     "test02_lobes_rejects")),
+    ("Mitsuba's χ² harness raises in polarized variants (its BSDFAdapter masks a Mueller "
+     "weight) and cannot judge a Dirac lobe (pdf 0 by convention)",
+     "the audit marks it not applicable there; our χ² reduces Mueller weights and handles "
+     "Dirac lobes",
+     ("tests/checks/test_lobes.py",
+     "test06_chi2_tests_the_selection_of_a_smooth_lobe_beside_a_dirac_one")),
+]

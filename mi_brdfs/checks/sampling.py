@@ -224,6 +224,10 @@ def chi2_bsdf(bsdf, wi=(0.0, 0.0, 1.0), ctx=None, res: int | None = 101, ires: i
                          sample_dim=3, sample_count=sample_count, res=res, ires=ires, seed=seed)
     passed = bool(test.run(significance_level=significance, test_count=test_count, quiet=True))
     p = float(test.p_value) if test.p_value is not None else float("nan")
+    if test.histogram is not None and not float(np.sum(np.asarray(test.histogram))) > 0:
+        return CheckResult("chi2", False, p, significance,
+                           f"χ²: {where}{note}: no sample succeeded (every weight is 0): the "
+                           f"test would pass vacuously", details={"wi": wi.tolist()})
     level = 1.0 - (1.0 - significance) ** (1.0 / test_count)  # Šidák, as mitsuba.chi2 does
     log = " ".join(str(test.messages).split())
     log = log.replace(' Target density and histogram were written to "chi2_data.py".', "")

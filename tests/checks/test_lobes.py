@@ -188,3 +188,10 @@ def test07_positivity_rejects_a_pdf_across_the_surface(two_lobes):
     assert checks.check_positivity("roughdielectric alpha=0.3", n=20_000).passed
     result = checks.check_positivity(two_lobes("pdf_below"), n=20_000)
     assert not result.passed and result.details["across"] > 0, result.message
+
+
+def test08_chi2_rejects_a_vacuous_pass(variant_llvm_ad_rgb):
+    """A BSDF none of whose samples succeeds (a one-sided diffuse lit from below) fails χ²
+    instead of passing on an empty histogram."""
+    result = checks.chi2_bsdf("diffuse", wi=[0.0, 0.6, -0.8], res=101, ires=4, rotate=False)
+    assert not result.passed and "no sample succeeded" in result.message, result.message

@@ -16,6 +16,7 @@ FINDINGS = [
                 "coarsest in θ) that integral is wrong (its 'PDF sum' departs from 1, e.g. 21.6 "
                 "for roughdielectric GGX α = 0.05 at normal incidence), so the test compares "
                 "the histogram with a mis-integrated pdf. Mitsuba's own tests raise the "
-                "resolution for sharp lobes (src/bsdfs/tests/test_rough_conductor.py at v3.9.1: "
-                "α = 0.05 with res = 140, ires = 32; anisotropic α = 0.05 with ires = 16)."),
+                "resolution for sharp lobes (test_rough_conductor.py of its src/bsdfs tests, "
+                "v3.9.1: α = 0.05 with res = 140, ires = 32; anisotropic α = 0.05 with "
+                "ires = 16)."),
 ]
