@@ -12,8 +12,10 @@ OUT    := out
 SPP    ?= 64
 RES    ?= 256
 PYTEST_ARGS ?=
+# The documents whose quoted figures make validate and make bench fill in from their reports
+QUOTING := $(foreach f,README.md $(wildcard docs/*.md),--readme $(f))
 
-.PHONY: all setup system render test bench validate audit figures docs clean distclean
+.PHONY: all setup system render test bench validate audit figures docs gallery clean distclean
 
 all: test
 
@@ -42,11 +44,11 @@ test: $(STAMP)
 	exit $$rc
 
 bench: $(STAMP)
-	$(VENV)/bin/mi-brdfs bench --out validation --readme README.md
+	$(VENV)/bin/mi-brdfs bench --out validation $(QUOTING)
 
 # The validation campaign: validation/REPORT.md and validation/figures/ (about 3 min)
 validate: $(STAMP)
-	$(VENV)/bin/mi-brdfs validate --out validation --readme README.md
+	$(VENV)/bin/mi-brdfs validate --out validation $(QUOTING)
 
 # The audit of every BSDF Mitsuba ships: validation/MITSUBA_AUDIT.md and validation/audit/
 # (about 5 min on 2 cores; resumable: results are cached in validation/audit/.cache)
@@ -62,6 +64,10 @@ figures: $(STAMP)
 # The plugin reference, docs/plugins/*.md, generated from the plugins' docstrings
 docs: $(STAMP)
 	$(PY) -m mi_brdfs.docgen
+
+# A gallery of every plugin and form at a few parameter values (docs/gallery.png)
+gallery: $(STAMP)
+	$(PY) -m mi_brdfs.gallery --out docs/gallery.png
 
 clean:
 	rm -rf $(OUT) .pytest_cache

@@ -50,6 +50,8 @@ _seed = _number(int, "a whole number", lambda v: 0 <= v < 2**32, "must lie in [0
 _finite = _number(float, "a number", math.isfinite, "must be finite")
 _seconds = _number(float, "a number", lambda v: math.isfinite(v) and v > 0,
                    "must be finite and > 0 seconds")
+_positive = _number(float, "a number", lambda v: math.isfinite(v) and v > 0,
+                    "must be finite and > 0")
 
 
 def _output(*suffixes: str):
@@ -213,6 +215,41 @@ def _parser() -> argparse.ArgumentParser:
     ft.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     ft.set_defaults(func=cmd_fit)
 
+    sm = sub.add_parser("simplify", help="cheaper materials within a tolerance: table, plot, "
+                                         "simplified scene",
+                        description="For every BSDF of SCENE, render cheaper candidates (switches "
+                                    "of the plugins, the built-in with the same model, fitted "
+                                    "cheaper models) in the scene itself; measure each one's bias "
+                                    "against the original (relative RMSE, 2 to 16 seeds, common "
+                                    "random numbers), its cost per sample and variance, and so "
+                                    "its time to reach the tolerance; write the scene with each "
+                                    "material replaced by its cheapest candidate within the "
+                                    "tolerance (every other byte kept) and verify it by one more "
+                                    "render (see mi_brdfs.simplify).")
+    sm.add_argument("scene", metavar="SCENE", help="scene XML file or bundled scene name")
+    sm.add_argument("--tolerance", type=_positive, default=0.01, metavar="T",
+                    help="relative RMSE of the converged image against the original's "
+                         "(RMSE over the mean; default 0.01)")
+    _add_variant(sm)
+    sm.add_argument("-o", "--output", metavar="SIMPLIFIED.xml", type=_output(".xml"),
+                    help="the simplified scene (default: ./<scene name>-simplified.xml)")
+    sm.add_argument("--report", metavar="DIR",
+                    help="write SIMPLIFY.md and simplify.png there (and keep the cache in "
+                         "DIR/cache)")
+    sm.add_argument("--quick", action="store_true",
+                    help="small renders (-D res=128 where the scene declares res, 16 spp) and "
+                         "short fits")
+    sm.add_argument("--spp", type=_count, metavar="N",
+                    help="samples per pixel of each render (default 64; --quick: 16)")
+    sm.add_argument("-D", dest="defines", action="append", default=[], metavar="name=value",
+                    help="override a <default> of the scene (repeatable)")
+    sm.add_argument("--confidence", type=_finite, default=2.0, metavar="Z",
+                    help="standard errors by which a candidate's speed-up must exceed 1 to "
+                         "replace a material (default 2; 0: any estimated gain)")
+    sm.add_argument("--no-cache", action="store_true", help="measure everything again")
+    sm.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    sm.set_defaults(func=cmd_simplify)
+
     def report_command(name, summary, description, quick, target, tag):
         """A subcommand that writes a report into --out (and quotes into --readme)."""
         cmd = sub.add_parser(name, help=summary, description=description)
@@ -221,9 +258,10 @@ def _parser() -> argparse.ArgumentParser:
                          help=f"report folder (default: the current directory; {target}: "
                               f"validation)")
         cmd.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-        cmd.add_argument("--readme", metavar="FILE",
+        cmd.add_argument("--readme", metavar="FILE", action="append",
                          help=f"also fill in the figures FILE quotes from the run, each marked "
-                              f"<!-- {tag}: KEY -->VALUE<!-- /{tag} --> ({target}: README.md)")
+                              f"<!-- {tag}: KEY -->VALUE<!-- /{tag} --> (repeatable; {target}: "
+                              f"README.md and docs/*.md)")
         return cmd
 
     v = report_command("validate", "the validation campaign: REPORT.md with figures",
@@ -470,6 +508,24 @@ def cmd_fit(args) -> int:
     return 0
 
 
+def cmd_simplify(args) -> int:
+    import mi_brdfs
+    from .imageio import check_writable
+    from .scenes import parse_defines, scene_path
+    from .simplify import simplify
+
+    path = scene_path(args.scene)
+    out = check_writable(Path(args.output) if args.output
+                         else Path.cwd() / f"{path.stem}-simplified.xml")
+    defines = parse_defines(args.defines)
+    mi_brdfs.use_variant(args.variant)
+    result = simplify(path, args.tolerance, output=out, report=args.report, quick=args.quick,
+                      spp=args.spp, defines=defines, cache=not args.no_cache,
+                      confidence=args.confidence, progress=not args.quiet)
+    print(result.summary())
+    return 0
+
+
 def _one_bsdf(specs: list, what: str) -> list:
     from .errors import MiBrdfsError
 
@@ -515,9 +571,10 @@ def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) 
     from .campaign.core import fill_quotes
     from .errors import MiBrdfsError
 
-    readme = getattr(args, "readme", None)
-    if readme and not Path(readme).is_file():
-        raise MiBrdfsError(f"--readme {readme}: no such file")
+    readmes = getattr(args, "readme", None) or []
+    for readme in readmes:
+        if not Path(readme).is_file():
+            raise MiBrdfsError(f"--readme {readme}: no such file")
     out = _report_folder(args, kwargs.get("filename", "REPORT.md"))
     variant = _jit_variant(f"the {kwargs.get('title', 'report')}")
     report, done, values = run(sections, Context(out=out, quick=args.quick, variant=variant),
@@ -531,7 +588,7 @@ def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) 
         print(f"wrote {report}: {len(rows) - len(failed)} of {len(rows)} {what} as expected")
     for r in failed:
         print(f"  unexpected: {r.plugin}: {r.check}: {r.result} ({r.verdict})")
-    if readme and quotes:
+    for readme in readmes if quotes else []:
         count = fill_quotes(readme, values, quotes)
         print(f"updated {readme}: {count} figures quoted from {report.name}")
     return failed

@@ -13,10 +13,10 @@ from .core import Context, Section, run
 
 def sections() -> list:
     """The report's sections, in order."""
-    from . import (anisotropy, claims, cooktorrance, extremes, lambert, orennayar, phong,
+    from . import (anisotropy, claims, cooktorrance, extremes, fits, lambert, orennayar, phong,
                    transmission, ward)
     return [lambert.section, phong.section, cooktorrance.section, anisotropy.section,
-            transmission.section, ward.section, orennayar.section, claims.section,
+            transmission.section, ward.section, orennayar.section, fits.section, claims.section,
             extremes.section]
 
 

@@ -125,7 +125,7 @@ class Phong(mi.BSDF):
     and the sampled directions follow the float64 lobe far beyond the exponents where the
     textbook pow(R·V, n) and sqrt(1 − cos²θ) break down; ``validation/phong_float32.py``
     measures both against the float64 reference, exponent by exponent (``python
-    validation/phong_float32.py``; the README quotes its table). The halfway lobe is less
+    validation/phong_float32.py``; docs/models.md quotes its table). The halfway lobe is less
     precise than the mirror lobe at large n:
     the half-vector of two float32 unit vectors is itself uncertain by about 3e-8 rad. Beyond
     n ≈ 1e12 the lobe (about sqrt(2/n) rad wide) spans only a few float32 directions: sampled

@@ -20,18 +20,29 @@ def test01_quick_campaign(tmp_path, capsys):
 def test02_quick_benchmark(tmp_path, capsys):
     """
     mi-brdfs bench --quick: the report and its plots exist (the quick timings mean nothing), and
-    --readme fills in every figure a copy of the README quotes from it: the run measures them all.
+    --readme fills in every figure copies of the README and docs/*.md quote from it: the run
+    measures them all.
     """
     import shutil
     from pathlib import Path
 
-    readme = tmp_path / "README.md"
-    shutil.copy(Path(__file__).resolve().parents[2] / "README.md", readme)
-    quoted = readme.read_text().count("<!-- bench: ")
-    assert quoted >= 40
-    assert main(["bench", "--quick", "--out", str(tmp_path), "-q", "--readme", str(readme)]) == 0
-    minutes = re.search(r"<!-- bench: run: minutes -->([\d.]+)<!-- /bench -->", readme.read_text())
-    assert readme.read_text().count("<!-- bench: ") == quoted and float(minutes.group(1)) < 5
+    root = Path(__file__).resolve().parents[2]
+    docs = []
+    for source in [root / "README.md", *sorted((root / "docs").glob("*.md"))]:
+        docs.append(tmp_path / "docs" / source.name)
+        docs[-1].parent.mkdir(exist_ok=True)
+        shutil.copy(source, docs[-1])
+
+    def quoted():
+        return sum(d.read_text().count("<!-- bench: ") for d in docs)
+
+    before = quoted()
+    assert before >= 40
+    args = [a for d in docs for a in ("--readme", str(d))]
+    assert main(["bench", "--quick", "--out", str(tmp_path), "-q", *args]) == 0
+    text = "".join(d.read_text() for d in docs)
+    minutes = re.search(r"<!-- bench: run: minutes -->([\d.]+)<!-- /bench -->", text)
+    assert quoted() == before and float(minutes.group(1)) < 5
     report = (tmp_path / "SPEED_ACCURACY.md").read_text()
     assert report.startswith("# mi_brdfs speed vs accuracy")
     for title in ("## Backends", "## Error against time"):

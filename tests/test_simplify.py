@@ -1,0 +1,299 @@
+"""
+mi_brdfs.simplify and ``mi-brdfs simplify`` on a tiny scene (16² pixels, 8 spp): the BSDF
+elements and their byte spans (nested, self-closing, in comments), a simplification re-measured
+independently (the original and the simplified file rendered at other seeds and compared), the
+bytes outside the replaced elements, lambert → diffuse at zero bias, a wrong candidate that
+the measurement rejects and the independent re-measurement catches, the cache, and one-line
+errors. About 15 s on two cores.
+"""
+
+import math
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+import mi_brdfs
+from mi_brdfs import simplify as simplify_module
+from mi_brdfs.cli import main
+from mi_brdfs.errors import MiBrdfsError
+from mi_brdfs.simplify import scene_bsdfs, simplify, splice
+
+TOLERANCE = 0.05
+
+#: A sphere under a white sky; in the llvm test also a card behind it, whose material is a
+#: phong with a faint glossy lobe nested in a twosided.
+TINY = """<?xml version="1.0" encoding="utf-8"?>
+<!-- A tiny scene: <bsdf type="phong"> in this comment is no material -->
+<scene version="3.0.0">
+    <default name="res" value="24"/>
+    <integrator type="path"><integer name="max_depth" value="3"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="28"/>
+        <transform name="to_world">
+            <lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/>
+        </transform>
+        <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="$res"/>
+            <integer name="height" value="$res"/>
+            <rfilter type="box"/>
+        </film>
+    </sensor>
+    <emitter type="constant"><rgb name="radiance" value="1, 1, 1"/></emitter>
+    <shape type="sphere">
+      <bsdf type="lambert" id="ball">
+        <rgb name="reflectance" value="0.2, 0.5, 0.7"/>
+      </bsdf>
+    </shape>
+CARD</scene>
+"""
+
+CARD = """    <shape type="rectangle">
+        <transform name="to_world"><scale value="1.2"/><translate z="-1.5"/></transform>
+        <bsdf type="twosided" id="card">
+            <bsdf type="phong">
+                <rgb name="diffuse_reflectance" value="0.6, 0.5, 0.4"/>
+                <float name="specular_reflectance" value="0.01"/>
+                <float name="exponent" value="20"/>
+            </bsdf>
+        </bsdf>
+    </shape>
+"""
+
+SMALL = {"quick": True, "spp": 8, "defines": {"res": "16"}}
+
+
+def write_scene(tmp_path, card: bool = False):
+    path = tmp_path / "tiny.xml"
+    path.write_text(TINY.replace("CARD", CARD if card else ""))
+    return path
+
+
+def remeasure(original, simplified, seeds=(11, 12), spp=256, res=32) -> tuple[float, float]:
+    """
+    (relative RMSE of the simplified file's render against the original's, the same between
+    two seeds of the original: the noise floor), in llvm_ad_rgb, independent of
+    mi_brdfs.simplify: plain renders of both files, seeds it never uses.
+    """
+    mi_brdfs.use_variant("llvm_ad_rgb")
+    import mitsuba as mi
+
+    def render(path, seed):
+        scene = mi.load_file(str(path), res=str(res))
+        return np.array(mi.render(scene, seed=seed, spp=spp), dtype=np.float64)
+
+    a, a2, b = render(original, seeds[0]), render(original, seeds[1]), render(simplified, seeds[1])
+    mean = float(np.mean(a))
+    rel = lambda x, y: float(np.sqrt(np.mean((x - y) ** 2))) / mean
+    return rel(a, b), rel(a, a2)
+
+
+def outermost(data: bytes) -> list:
+    """The BSDF elements not nested in another, in file order."""
+    materials, _ = scene_bsdfs(data)
+    out, end = [], -1
+    for m in materials:
+        if m.start >= end:
+            out.append(m)
+            end = m.end
+    return out
+
+
+def assert_rest_identical(original: bytes, simplified: bytes, replaced: set):
+    """
+    Every byte outside the outermost <bsdf> elements is the same in both files, and those
+    elements are too, but for the ``replaced`` ones (by label of their outermost element).
+    """
+    old, new = outermost(original), outermost(simplified)
+    assert [m.label for m in old] == [m.label for m in new]
+    cuts = lambda data, ms: [data[a.end:b.start] for a, b in zip(ms, ms[1:])]
+    assert original[:old[0].start] == simplified[:new[0].start]
+    assert original[old[-1].end:] == simplified[new[-1].end:]
+    assert cuts(original, old) == cuts(simplified, new)
+    for a, b in zip(old, new):
+        assert (a.text != b.text) == (a.label in replaced), a.label
+
+
+def test01_bsdf_spans_nested_self_closing_and_comments():
+    data = b"""<scene version="3.0.0">
+    <!-- <bsdf type="lambert" id="commented"/> -->
+    <bsdf type="diffuse" id="a&gt;b"/>
+    <shape type="sphere">
+        <bsdf type="blendbsdf" id="blend">
+            <float name="weight" value="0.5"/>
+            <bsdf type="phong" name="one"><float name="exponent" value="$n"/></bsdf>
+            <bsdf type="twosided"><bsdf type="lambert"/></bsdf>
+        </bsdf>
+    </shape>
+    <default name="n" value="7"/>
+</scene>"""
+    materials, defaults = scene_bsdfs(data)
+    assert defaults == {"n": "7"}
+    labels = [m.label for m in materials]
+    assert labels == ["a>b", "blend", "phong in blend", "twosided in blend",
+                      "lambert in twosided in blend"]
+    assert [m.leaf for m in materials] == [True, False, True, False, True]
+    for m in materials:
+        assert data[m.start:m.end].decode() == m.text
+        assert m.text.startswith("<bsdf") and m.text.endswith(("/>", "</bsdf>"))
+        assert ET.fromstring(m.text).tag == "bsdf"
+    assert materials[2].indent == " " * 12
+    lam = materials[-1]
+    assert splice(data, {(lam.start, lam.end): '<bsdf type="diffuse"/>'}) == \
+        data.replace(b'<bsdf type="lambert"/>', b'<bsdf type="diffuse"/>')
+    with pytest.raises(MiBrdfsError, match="not valid XML"):
+        scene_bsdfs(b"<scene><bsdf></scene>")
+
+
+def test02_scalar_lambert_to_diffuse_remeasured_independently(tmp_path):
+    """
+    scalar_rgb, where the Python lambert costs several times the built-in diffuse: the
+    simplification replaces it (zero bias, faster), writes a file whose other bytes are the
+    original's and that loads, and an independent render of it is within the tolerance.
+    """
+    mi_brdfs.use_variant("scalar_rgb")
+    path = write_scene(tmp_path)
+    out = tmp_path / "simplified.xml"
+    result = simplify(path, TOLERANCE, output=out, cache=tmp_path / "cache", repeats=7, **SMALL)
+    (ball,) = result.materials
+    diffuse = next(c for c in ball.candidates if c.label == "diffuse")
+    assert diffuse.bias < 1e-5 and diffuse.measured["noise"] < 1e-5
+    assert ball.candidates[ball.chosen] is diffuse, result.summary()
+    assert diffuse.measured["cost_ratio"] < 1
+    assert result.verification.bias_hi < TOLERANCE and result.verification.speedup > 1
+
+    original, simplified = path.read_bytes(), out.read_bytes()
+    assert_rest_identical(original, simplified, {"ball"})
+    (element,) = outermost(simplified)
+    assert ET.fromstring(element.text).attrib == {"type": "diffuse", "id": "ball"}
+    import mitsuba as mi
+    mi.load_file(str(out), res="16")  # loads
+
+    error, noise = remeasure(path, out)
+    assert error <= TOLERANCE and noise <= TOLERANCE / 3, (error, noise)
+
+
+def test03_llvm_cli_report_nested_and_cache(tmp_path, capsys, monkeypatch):
+    """
+    The command line in llvm_ad_rgb: the tables (nested phong included), SIMPLIFY.md, the plot
+    and the simplified file; a rerun with another tolerance renders nothing new.
+    """
+    monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
+    path = write_scene(tmp_path, card=True)
+    out, report = tmp_path / "out.xml", tmp_path / "report"
+    code = main(["simplify", str(path), "--tolerance", str(TOLERANCE), "--quick", "--spp", "8",
+                 "-D", "res=16", "-o", str(out), "--report", str(report), "--variant",
+                 "llvm_ad_rgb"])
+    printed = capsys.readouterr().out
+    assert code == 0
+    assert "### ball (`lambert`" in printed and "### phong in card (`phong`" in printed
+    # (the row is in bold when timing noise makes the built-in measurably faster and chosen)
+    assert "| diffuse | built-in | 0.0000" in printed.replace(" — the same model (lambert "
+                                                            "computes what diffuse computes)",
+                                                            "").replace("**", "")
+    assert "diffuse: the glossy lobe left out" in printed
+    text = (report / "SIMPLIFY.md").read_text()
+    assert "## Materials" in text and "simplify.png" in text
+    assert (report / "simplify.png").stat().st_size > 1000
+    original, simplified = path.read_bytes(), out.read_bytes()
+    replaced = {m.label for m in outermost(original)} - {"ball", "card"}
+    assert not replaced
+    changed = {a.label for a, b in zip(outermost(original), outermost(simplified))
+               if a.text != b.text}
+    assert_rest_identical(original, simplified, changed)
+    import mitsuba as mi
+    mi.load_file(str(out), res="16")
+    error, _ = remeasure(path, out)
+    assert error <= TOLERANCE, error
+
+    # another tolerance: every measurement comes from the cache
+    result = simplify(path, 0.1, report=report, **SMALL)
+    assert result.renders == 0, result.renders
+    lobe = next(c for m in result.materials for c in m.candidates
+                if c.label == "diffuse: the glossy lobe left out")
+    assert lobe.cached and lobe.bias < 0.1
+
+
+def test04_wrong_candidate_rejected_and_caught(tmp_path, monkeypatch):
+    """
+    A deliberately wrong candidate (lambert's "diffuse" with another reflectance): the
+    simplification measures its bias above the tolerance and keeps the original, even when any
+    speed-up would do (confidence 0); and the independent re-measurement of a file with that
+    candidate exceeds the tolerance, so it would have caught it.
+    """
+    mi_brdfs.use_variant("llvm_ad_rgb")
+    real = simplify_module.candidates_for
+
+    def wrong(material, values, fit_fn):
+        out = []
+        for label, kind, element, note in real(material, values, fit_fn):
+            if label == "diffuse":
+                for child in element:
+                    if child.get("name") == "reflectance":
+                        child.set("value", "0.9, 0.9, 0.9")
+            out.append((label, kind, element, note))
+        return out
+
+    monkeypatch.setattr(simplify_module, "candidates_for", wrong)
+    path = write_scene(tmp_path)
+    out = tmp_path / "simplified.xml"
+    result = simplify(path, TOLERANCE, output=out, cache=False, confidence=0, **SMALL)
+    (ball,) = result.materials
+    diffuse = next(c for c in ball.candidates if c.label == "diffuse")
+    assert diffuse.bias_lo > TOLERANCE and diffuse.verdict == "over tolerance"
+    assert ball.chosen == 0 and out.read_bytes() == path.read_bytes()
+
+    (element,) = outermost(path.read_bytes())
+    wrong_file = tmp_path / "wrong.xml"
+    wrong_file.write_bytes(splice(path.read_bytes(), {(element.start, element.end):
+                                                      diffuse.xml}))
+    error, noise = remeasure(path, wrong_file)
+    assert error > TOLERANCE > noise, (error, noise)
+
+
+NO_BSDF = """<scene version="3.0.0"><integrator type="path"/>
+    <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/>
+    <integer name="height" value="8"/></film></sensor>
+    <emitter type="constant"/><shape type="sphere"/></scene>"""
+
+BAD = [
+    (["simplify", "nosuch.xml"], "scene file nosuch.xml does not exist"),
+    (["simplify", "nobsdf.xml"], "nobsdf.xml has no <bsdf>: nothing to simplify"),
+    (["simplify", "tiny.xml", "--tolerance", "0"], "argument --tolerance: must be finite and > 0"),
+    (["simplify", "tiny.xml", "--tolerance", "-0.01"], "--tolerance: must be finite and > 0"),
+    (["simplify", "tiny.xml", "--tolerance", "nan"], "--tolerance: must be finite and > 0"),
+    (["simplify", "tiny.xml", "--tolerance", "inf"], "--tolerance: must be finite and > 0"),
+    (["simplify", "tiny.xml", "-o", "/nonexistent/x.xml"], "folder /nonexistent does not exist"),
+    (["simplify", "tiny.xml", "-o", "x.txt"], "'x.txt' must end in .xml"),
+    (["simplify", "tiny.xml", "--report", "/proc/x"], "report /proc/x: cannot create the folder"),
+    (["simplify", "tiny.xml", "-D", "spp=4"], "tiny.xml declares no <default> for spp"),
+    (["simplify", "tiny.xml", "--spp", "0"], "argument --spp: must be at least 1"),
+]
+
+
+@pytest.mark.parametrize("args,message", BAD, ids=[" ".join(a[1:]) for a, _ in BAD])
+def test05_bad_input_one_line_exit_2(tmp_path, tmp_path_factory, monkeypatch, capsys, args,
+                                     message):
+    write_scene(tmp_path)
+    (tmp_path / "nobsdf.xml").write_text(NO_BSDF)
+    monkeypatch.chdir(tmp_path)
+    xdg = tmp_path_factory.mktemp("xdg")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(xdg))
+    try:
+        code = main(args)
+    except SystemExit as e:  # argparse
+        code = e.code
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.strip().splitlines() if ln]
+    assert code == 2, (code, err)
+    assert len(lines) == 1 and lines[0].startswith("mi-brdfs: error: "), err
+    assert message in lines[0] and "Traceback" not in err, lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["nobsdf.xml", "tiny.xml"]
+    assert not (xdg / "mi_brdfs" / "simplify").exists()  # no cache either
+
+
+@pytest.mark.parametrize("tolerance", [0, -1, math.nan, math.inf, "0.01", True])
+def test06_api_tolerance(tmp_path, tolerance):
+    with pytest.raises(MiBrdfsError, match="tolerance .* is invalid: must be a finite number > 0"):
+        simplify(write_scene(tmp_path), tolerance, cache=False)
