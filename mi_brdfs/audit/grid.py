@@ -84,8 +84,7 @@ def mitsuba_cases() -> list[Case]:
     for dist in ("beckmann", "ggx"):
         for a in (0.05, 0.3):
             c.append(case("roughconductor", f"{dist} α={a} Au",
-                          dict(RC, distribution=dist, alpha=a, material="Au"),
-                          quick=(dist, a) == ("ggx", 0.3)))
+                          dict(RC, distribution=dist, alpha=a, material="Au")))
         c.append(case("roughconductor", f"{dist} α=0.3 sample_visible=false",
                       dict(RC, distribution=dist, alpha=0.3, sample_visible=False)))
         c.append(case("roughconductor", f"{dist} αu=0.05 αv=0.3",
@@ -96,8 +95,7 @@ def mitsuba_cases() -> list[Case]:
     for dist in ("beckmann", "ggx"):
         for a in (0.05, 0.3):
             c.append(case("roughdielectric", f"{dist} α={a}",
-                          dict(RD, distribution=dist, alpha=a),
-                          quick=(dist, a) == ("ggx", 0.05)))
+                          dict(RD, distribution=dist, alpha=a)))
         c.append(case("roughdielectric", f"{dist} α=0.3 sample_visible=false",
                       dict(RD, distribution=dist, alpha=0.3, sample_visible=False)))
         c.append(case("roughdielectric", f"{dist} αu=0.05 αv=0.3",
@@ -122,7 +120,7 @@ def mitsuba_cases() -> list[Case]:
     c += [case("principledthin", "default", {"type": "principledthin"}),
           case("principledthin", "roughness=0.1 diff_trans=0.5",
                {"type": "principledthin", "roughness": 0.1, "diff_trans": 0.5})]
-    c += [case("hair", "default", {"type": "hair"}, quick=True)]
+    c += [case("hair", "default", {"type": "hair"})]
     c += [case("blendbsdf", "diffuse + roughconductor, weight 0.3",
                {"type": "blendbsdf", "weight": 0.3, "a": {"type": "diffuse"},
                 "b": dict(RC, alpha=0.2)}),
@@ -163,7 +161,7 @@ def package_cases() -> list[Case]:
         case("phong", "normalized, halfway", {"type": "phong", "form": "normalized",
                                               "lobe": "halfway"}),
         case("phong", "original (not reciprocal)", {"type": "phong", "form": "original"}),
-        case("cooktorrance", "default (V-cavity, Cu)", ct, quick=True),
+        case("cooktorrance", "default (V-cavity, Cu)", ct),
         case("cooktorrance", "smith ggx α=0.3", dict(ct, shadowing="smith",
                                                      distribution="ggx", alpha=0.3)),
         case("cooktorrance", "αu=0.05 αv=0.3 smith", dict(ct, shadowing="smith", alpha_u=0.05,

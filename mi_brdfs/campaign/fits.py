@@ -53,7 +53,7 @@ def models_for(target: str) -> list:
 
 def _sizes(ctx: Context) -> dict:
     if ctx.quick:
-        return {"pairs": 4096, "steps": 200, "thetas_deg": (0.0, 30.0, 60.0, 80.0, 87.0, 89.0)}
+        return {"pairs": 1024, "steps": 40, "thetas_deg": (0.0, 60.0, 89.0)}
     return {"pairs": 16384, "steps": 800, "thetas_deg": ALBEDO_THETAS}
 
 
