@@ -536,19 +536,9 @@ def _one_bsdf(specs: list, what: str) -> list:
 
 def _report_folder(args, filename: str) -> Path:
     """The report folder (created), checked writable for ``filename`` before any work."""
-    from .errors import MiBrdfsError
-    from .imageio import check_writable
+    from .imageio import output_folder
 
-    out = Path(args.out).expanduser().absolute()
-    if out.exists() and not out.is_dir():
-        raise MiBrdfsError(f"--out {args.out}: not a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise MiBrdfsError(f"--out {args.out}: cannot create the folder: {e.strerror or e}") \
-            from None
-    check_writable(out / filename)
-    return out
+    return output_folder(args.out, f"--out {args.out}", filename)
 
 
 def _jit_variant(what: str) -> str:

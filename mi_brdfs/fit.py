@@ -735,23 +735,17 @@ def plot_fit(result: FitResult, path, thetas_deg=(0.0, 30.0, 60.0, 80.0)) -> str
     (f·cosθo)^(1/3), the fit's compression) and the directional albedo E(θ) (mean of channels).
     """
     from .bsdfspec import describe
-    from .plots import lobe_values, pyplot, save_figure
+    from .plots import cube_root_lobe, lobe_values, pyplot, save_figure
 
     plt = pyplot()
     k = len(thetas_deg)
     fig = plt.figure(figsize=(3.6 * k + 4.8, 4.2))
     for j, theta_i in enumerate(thetas_deg):
         ax = fig.add_subplot(1, k + 1, j + 1, projection="polar")
-        for spec, label, style in ((result.target, "target", "-"), (result.spec, "fit", "--")):
-            theta_o, value = lobe_values(spec, theta_i)
-            ax.plot(np.radians(theta_o), np.cbrt(np.maximum(value, 0.0)), style, lw=1.4,
-                    label=label)
-        ax.set_theta_zero_location("N")
-        ax.set_thetamin(-90)
-        ax.set_thetamax(90)
-        ax.set_yticklabels([])
-        ax.tick_params(axis="x", labelsize=7)
-        ax.set_title(f"θi = {theta_i:g}°", fontsize=9)
+        cube_root_lobe(ax, [(*lobe_values(spec, theta_i), style, dict(lw=1.4, label=label))
+                            for spec, label, style in ((result.target, "target", "-"),
+                                                       (result.spec, "fit", "--"))],
+                       f"θi = {theta_i:g}°")
     ax.legend(loc="lower right", fontsize=7)
     ax = fig.add_subplot(1, k + 1, k + 1)
     ax.plot(result.thetas_deg, result.albedo_target.mean(axis=1), "-o", ms=3, label="target")

@@ -50,6 +50,24 @@ def check_writable(path: str | os.PathLike) -> Path:
     return path
 
 
+def output_folder(path, name: str, filename: str) -> Path:
+    """
+    The folder ``path`` (created with its parents), checked writable for ``filename`` before
+    any work; one-line errors name it as ``name`` (e.g. ``--out DIR``).
+    """
+    from .errors import MiBrdfsError
+
+    out = Path(path).expanduser().absolute()
+    if out.exists() and not out.is_dir():
+        raise MiBrdfsError(f"{name}: not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise MiBrdfsError(f"{name}: cannot create the folder: {e.strerror or e}") from None
+    check_writable(out / filename)
+    return out
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, suffix: str = ""):
     """

@@ -28,7 +28,8 @@ def pyplot():
 
 
 def save_figure(fig, path) -> str:
-    """Write ``fig`` to ``path`` (format from the extension) atomically, close it, return the path."""
+    """Write ``fig`` to ``path`` (format from the extension) atomically, close it, return the
+    path."""
     from .imageio import atomic_path
 
     path = os.fspath(path)
@@ -58,6 +59,19 @@ def lobe_values(spec, theta_i_deg: float, n: int = 721, cosine: bool = True):
     if not cosine:
         value = np.where(wo[:, 2] > 1e-6, value / np.maximum(wo[:, 2], 1e-6), 0.0)
     return theta_o, value
+
+
+def cube_root_lobe(ax, curves, title: str) -> None:
+    """A polar half-plane of (f·cosθo)^(1/3) curves in the plane of incidence, as the fit plots
+    draw them: ``curves`` are (θo in degrees, values, matplotlib style, keyword arguments)."""
+    for theta_o, value, style, kw in curves:
+        ax.plot(np.radians(theta_o), np.cbrt(np.maximum(value, 0.0)), style, **kw)
+    ax.set_theta_zero_location("N")
+    ax.set_thetamin(-90)
+    ax.set_thetamax(90)
+    ax.set_yticklabels([])
+    ax.tick_params(axis="x", labelsize=7)
+    ax.set_title(title, fontsize=9)
 
 
 def plot_lobe(specs, path, thetas_deg=(0.0, 30.0, 60.0, 80.0), log: bool = False,

@@ -1092,18 +1092,9 @@ def _check_tolerance(tolerance) -> float:
 def _report_dir(report) -> Path | None:
     if report is None:
         return None
-    from .imageio import check_writable
+    from .imageio import output_folder
 
-    out = Path(report).expanduser().absolute()
-    if out.exists() and not out.is_dir():
-        raise MiBrdfsError(f"report {report}: not a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise MiBrdfsError(f"report {report}: cannot create the folder: {e.strerror or e}") \
-            from None
-    check_writable(out / "SIMPLIFY.md")
-    return out
+    return output_folder(report, f"report {report}", "SIMPLIFY.md")
 
 
 @counts("spp", "repeats")

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..fit import ALBEDO_THETAS, fit, spec_text
-from ..plots import lobe_values, pyplot, save_figure
+from ..plots import cube_root_lobe, lobe_values, pyplot, save_figure
 from .core import Context, Row, Section, image, md_table
 
 #: (label, target spec).
@@ -68,20 +68,11 @@ def figure(ctx: Context, fits: dict) -> str:
         results = fits[label]
         for j, theta in enumerate(LOBE_THETAS):
             ax = fig.add_subplot(rows, 3, 3 * i + j + 1, projection="polar")
-            theta_o, value = lobe_values(target, theta)
-            ax.plot(np.radians(theta_o), np.cbrt(np.maximum(value, 0)), "k-", lw=1.8,
-                    label="target")
-            for name, result in results.items():
-                theta_o, value = lobe_values(result.spec, theta)
-                color, ls = styles[name]
-                ax.plot(np.radians(theta_o), np.cbrt(np.maximum(value, 0)), ls, color=color,
-                        lw=1.4, label=name)
-            ax.set_theta_zero_location("N")
-            ax.set_thetamin(-90)
-            ax.set_thetamax(90)
-            ax.set_yticklabels([])
-            ax.tick_params(axis="x", labelsize=7)
-            ax.set_title(f"{label}: θi = {theta:g}°", fontsize=9)
+            curves = [(*lobe_values(target, theta), "k-", dict(lw=1.8, label="target"))]
+            curves += [(*lobe_values(result.spec, theta), styles[name][1],
+                        dict(color=styles[name][0], lw=1.4, label=name))
+                       for name, result in results.items()]
+            cube_root_lobe(ax, curves, f"{label}: θi = {theta:g}°")
             if j == 0:
                 ax.legend(loc="lower left", fontsize=7)
         ax = fig.add_subplot(rows, 3, 3 * i + 3)
