@@ -156,7 +156,7 @@ def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs va
     rows = [r for s in done for r in s.rows]
     judged = not ctx.quick or judge_quick
     for r in rows:
-        r.judged = judged
+        r.judged = judged and r.judged  # (a section may leave a quick row unjudged)
     failed = [r for r in rows if not r.ok]
     command = command + (" --quick" if ctx.quick else "")
     head = [

@@ -24,6 +24,18 @@ def conductor_names() -> list[str]:
     return sorted(n for n in names if (folder / f"{n}.k.spd").is_file())
 
 
+def _instantiate(plugin_type: str, **values):
+    """A Mitsuba plugin made directly by its plugin manager, not through the scene parser: the
+    plugins call this from their constructors, which Mitsuba may run on its parser's worker
+    threads while a scene loads, where a nested ``mi.load_dict`` is a re-entrant parse (in two
+    full test runs the showcase failed to load there, intermittently, with
+    ``basic_string::_M_create``; not reproduced in isolation)."""
+    props = mi.Properties(plugin_type)
+    for key, value in values.items():
+        props[key] = value
+    return mi.PluginManager.instance().create_object(props)
+
+
 def material_ior(name, plugin: str = "cooktorrance"):
     """
     The (η, k) textures of a named conductor, taken from a ``roughconductor`` with that
@@ -43,7 +55,7 @@ def material_ior(name, plugin: str = "cooktorrance"):
         def put(self, key, obj, flags):
             found[key] = obj
 
-    mi.load_dict({"type": "roughconductor", "material": name}).traverse(Collect())
+    _instantiate("roughconductor", material=name).traverse(Collect())
     return found["eta"], found["k"]
 
 
@@ -90,13 +102,14 @@ def dielectric_ior(value, plugin: str = "cooktorrance", name: str = "int_ior") -
         return value
     key = value.lower() if isinstance(value, str) else None
     if key not in DIELECTRIC_NAMES:
-        raise ParameterError(plugin, name, value, "must be a number > 0 or one of Mitsuba's "
-                                                  "named dielectrics: " + ", ".join(DIELECTRIC_NAMES))
+        raise ParameterError(plugin, name, value,
+                             "must be a number > 0 or one of Mitsuba's named dielectrics: "
+                             + ", ".join(DIELECTRIC_NAMES))
     if key not in _dielectric_cache:
         # The value as Mitsuba stores it: the relative index of a smooth dielectric against
         # vacuum is the bs.eta of a ray it refracts at normal incidence (not mi.traverse, which
         # must not run while a scene file is being parsed).
-        smooth = mi.load_dict({"type": "dielectric", "int_ior": key, "ext_ior": 1.0})
+        smooth = _instantiate("dielectric", int_ior=key, ext_ior=1.0)
         si = mi.SurfaceInteraction3f()
         si.wi = mi.Vector3f(0.0, 0.0, 1.0)
         bs, _ = smooth.sample(mi.BSDFContext(), si, 0.999999, mi.Point2f(0.5, 0.5))
