@@ -268,6 +268,12 @@ def check_energy(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, sigmas: 
         if worst is None or score[i, c] > worst_score:
             worst_score, worst = score[i, c], (label, value[i, c], err[i, c], i, c)
     label, value, err, i, c = worst
+    if all(np.all(v == 0) for _, v, _ in estimates):
+        return CheckResult("energy", False, 0.0, f"≤ 1 + {sigmas:g}σ",
+                           f"energy: {describe(spec)}: E(θ) = 0 at every angle by "
+                           f"{' and '.join(lbl for lbl, _, _ in estimates)}: no sample "
+                           f"succeeded and eval() is 0 everywhere, so the check would pass "
+                           f"vacuously", details={"curve": curve})
     passed = bool(all(np.all(np.isfinite(v)) for _, v, _ in estimates) and worst_score <= 0)
     where = f"θ = {curve.theta_deg[i]:.1f}°"
     if curve.sampled.shape[1] > 1:

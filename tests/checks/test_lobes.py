@@ -195,3 +195,13 @@ def test08_chi2_rejects_a_vacuous_pass(variant_llvm_ad_rgb):
     instead of passing on an empty histogram."""
     result = checks.chi2_bsdf("diffuse", wi=[0.0, 0.6, -0.8], res=101, ires=4, rotate=False)
     assert not result.passed and "no sample succeeded" in result.message, result.message
+
+
+def test09_energy_rejects_a_vacuous_pass(variant_llvm_ad_rgb):
+    """A BSDF that reflects nothing at all (a black diffuse: every weight and every eval is 0)
+    fails the energy check instead of passing at E = 0; a dark but reflecting one passes."""
+    dark = {"type": "diffuse", "reflectance": 0.01}
+    assert checks.check_energy(dark, thetas_deg=(0.0, 60.0), n=20_000).passed
+    black = {"type": "diffuse", "reflectance": 0.0}
+    result = checks.check_energy(black, thetas_deg=(0.0, 60.0), n=20_000)
+    assert not result.passed and "vacuously" in result.message, result.message
