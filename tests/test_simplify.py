@@ -12,6 +12,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
+from helpers import cli_one_line_error
 
 import mi_brdfs
 from mi_brdfs import simplify as simplify_module
@@ -273,22 +274,13 @@ BAD = [
 
 
 @pytest.mark.parametrize("args,message", BAD, ids=[" ".join(a[1:]) for a, _ in BAD])
-def test05_bad_input_one_line_exit_2(tmp_path, tmp_path_factory, monkeypatch, capsys, args,
-                                     message):
+def test05_bad_input_one_line_exit_2(tmp_path, tmp_path_factory, monkeypatch, args, message):
     write_scene(tmp_path)
     (tmp_path / "nobsdf.xml").write_text(NO_BSDF)
     monkeypatch.chdir(tmp_path)
     xdg = tmp_path_factory.mktemp("xdg")
     monkeypatch.setenv("XDG_CACHE_HOME", str(xdg))
-    try:
-        code = main(args)
-    except SystemExit as e:  # argparse
-        code = e.code
-    err = capsys.readouterr().err
-    lines = [ln for ln in err.strip().splitlines() if ln]
-    assert code == 2, (code, err)
-    assert len(lines) == 1 and lines[0].startswith("mi-brdfs: error: "), err
-    assert message in lines[0] and "Traceback" not in err, lines[0]
+    cli_one_line_error(args, message)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["nobsdf.xml", "tiny.xml"]
     assert not (xdg / "mi_brdfs" / "simplify").exists()  # no cache either
 

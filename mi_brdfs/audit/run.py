@@ -230,9 +230,9 @@ def _run_alone(case, variant, quick, path) -> list[dict]:
         try:
             out = pool.submit(run_case, case, variant, quick).result()
         except BrokenProcessPool:
-            out = [{"bsdf": case.bsdf, "config": case.config, "variant": variant,
-                    "check": "crash", "passed": False, "skipped": False, "value": "nan",
-                    "tolerance": "n/a", "details": {},
-                    "message": "the worker process died while checking this BSDF"}]
+            from ..checks.result import CheckResult
+            out = [_record(case, variant, CheckResult(
+                "crash", False, math.nan, "n/a",
+                "the worker process died while checking this BSDF"))]
     path.write_text(json.dumps(out, indent=1))
     return out

@@ -132,22 +132,34 @@ def albedo_eval(bsdf, theta: float, n: int | None = None, seed: int = 1,
                                      np.zeros((int((~ok).sum()), value.shape[1]))]))
 
 
+def sphere_quadrature(bsdf, theta: float, n_mu: int = 256, n_phi: int = 256, ctx=None,
+                      whole_sphere: bool = False):
+    """
+    (∫ eval dμ dφ (channels,), ∫ pdf dω) at incident angle ``theta`` (radians) on
+    :func:`~mi_brdfs.reference.quadrature.sphere_grid` (Gauss-Legendre in μ = cosθo, midpoint
+    in φo; ``eval`` already holds the cosine), over the upper hemisphere, and the lower one too
+    for a BSDF that transmits or with ``whole_sphere``. A NaN pdf counts as 0.
+    """
+    bsdf = load_bsdf(bsdf)
+    ranges = [(0.0, 1.0)] + ([(-1.0, 0.0)] if whole_sphere or _has(bsdf, "Transmission")
+                             else [])
+    value, pdf = 0.0, 0.0
+    for mu_range in ranges:
+        wo, weights = sphere_grid(n_mu, n_phi, mu_range)
+        e = batch.evaluate(bsdf, batch.direction(theta), wo, ctx)
+        value = value + np.einsum("n,nc->c", weights, e.value)
+        pdf += float(np.dot(weights, np.nan_to_num(e.pdf)))
+    return np.asarray(value), pdf
+
+
 @counts("n_mu", "n_phi")
 def albedo_quadrature(bsdf, theta: float, n_mu: int = 256, n_phi: int = 256, ctx=None):
     """
-    E(θ) = ∫ eval(ωo) dμ dφ on :func:`~mi_brdfs.reference.quadrature.sphere_grid` (Gauss-Legendre
-    in μ = cosθo, midpoint in φo); ``eval`` already holds the cosine.
+    E(θ) = ∫ eval(ωo) dμ dφ by :func:`sphere_quadrature`.
 
     Returns → (channels,). Costs n_mu·n_phi evaluations (twice with transmission).
     """
-    bsdf = load_bsdf(bsdf)
-    ranges = [(0.0, 1.0)] + ([(-1.0, 0.0)] if _has(bsdf, "Transmission") else [])
-    total = 0.0
-    for mu_range in ranges:
-        wo, weights = sphere_grid(n_mu, n_phi, mu_range)
-        value = batch.evaluate(bsdf, batch.direction(theta), wo, ctx).value
-        total = total + np.einsum("n,nc->c", weights, value)
-    return np.asarray(total)
+    return sphere_quadrature(bsdf, theta, n_mu, n_phi, ctx)[0]
 
 
 @dataclass

@@ -22,8 +22,8 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from ..reference.quadrature import sphere_grid
 from . import batch
+from .albedo import sphere_quadrature
 from .result import CheckResult
 
 #: Incident angles (degrees) of the lobe checks.
@@ -105,14 +105,9 @@ def check_lobes(spec, n: int | None = None, seed: int = 0, sigmas: float = 5.0) 
 
 
 def pdf_integral(bsdf, theta: float, n_mu: int = 256, n_phi: int = 256, ctx=None) -> float:
-    """∫ pdf(ωo) dωo over the whole sphere at incident angle ``theta`` (radians), by the
-    Gauss-Legendre × midpoint rule of :func:`~mi_brdfs.reference.quadrature.sphere_grid`."""
-    total = 0.0
-    for mu_range in ((0.0, 1.0), (-1.0, 0.0)):
-        wo, weights = sphere_grid(n_mu, n_phi, mu_range)
-        pdf = batch.evaluate(bsdf, batch.direction(theta), wo, ctx).pdf
-        total += float(np.dot(weights, np.nan_to_num(pdf)))
-    return total
+    """∫ pdf(ωo) dωo over the whole sphere at incident angle ``theta`` (radians)
+    (:func:`~mi_brdfs.checks.albedo.sphere_quadrature`)."""
+    return sphere_quadrature(bsdf, theta, n_mu, n_phi, ctx, whole_sphere=True)[1]
 
 
 #: Largest sampled pdf at which the quadrature (384² nodes per hemisphere, spacing ≈ 0.016 rad

@@ -573,7 +573,7 @@ class CookTorrance(mi.BSDF):
             pdf = mf.pdf_ndf(d_sample, m)
         if has_r and has_t:
             pdf = pdf * lobe_f
-        pdf = pdf * V.choose(reflect, lambda: 1.0 / dr.maximum(4.0 * dr.abs(cos_om), 1e-30),
+        pdf = pdf * V.choose(reflect, lambda: mf.reflection_jacobian(wo, m),
                              lambda: mf.refraction_jacobian(wi, wo, m, eta))
         # the lobe's factor: ks, or kt (and 1/η² for radiance: Veach 1997, §5.2)
         factor = self._lobe_factor(si, reflect, eta, radiance, active)

@@ -6,6 +6,7 @@ traceback and nothing written (run in-process, in an empty folder).
 
 import pytest
 
+from helpers import cli_one_line_error
 from mi_brdfs.cli import main
 
 SCENES = {
@@ -62,20 +63,12 @@ BAD = [
 
 
 @pytest.mark.parametrize("args,message", BAD, ids=[" ".join(a)[:60] for a, _ in BAD])
-def test01_one_line_exit_2_nothing_written(tmp_path, monkeypatch, capsys, args, message):
+def test01_one_line_exit_2_nothing_written(tmp_path, monkeypatch, args, message):
     for name, text in SCENES.items():
         (tmp_path / name).write_text(text)
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
-    try:
-        code = main(args)
-    except SystemExit as e:  # argparse
-        code = e.code
-    err = capsys.readouterr().err
-    lines = [ln for ln in err.strip().splitlines() if ln]
-    assert code == 2, (code, err)
-    assert len(lines) == 1 and lines[0].startswith("mi-brdfs: error: "), err
-    assert message in lines[0] and "Traceback" not in err, lines[0]
+    cli_one_line_error(args, message)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(SCENES)  # nothing written
 
 

@@ -7,15 +7,13 @@ extremes, rendering in every variant, textures, gradients and bad input.
 
 import math
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from helpers import eval_pdf, random_directions, sample
+from helpers import eval_gradient, eval_pdf, random_directions, sample
 
 import mi_brdfs
 from mi_brdfs import checks
-from mi_brdfs.checks import batch
 from mi_brdfs.reference import Ward
 
 FORMS = ("original", "duer", "balanced")
@@ -270,19 +268,7 @@ def test15_traverse_and_gradients(variant_llvm_ad_rgb, np_rng):
     wi = random_directions(np_rng, 500, lower=False)
     wo = wi * [-1, -1, 1] + np_rng.normal(0, 0.1, wi.shape)
     wo /= np.linalg.norm(wo, axis=1, keepdims=True)
-    si, w = batch.interaction(wi, len(wi)), batch.vectors(wo)
-
-    def total(a, grad=False):
-        params["alpha_u.value"] = mi.Float(a)
-        if grad:
-            dr.enable_grad(params["alpha_u.value"])
-        params.update()
-        return dr.sum(bsdf.eval(mi.BSDFContext(), si, w)[0])
-
-    value = total(0.1, grad=True)
-    dr.backward(value)
-    grad = float(np.array(dr.grad(params["alpha_u.value"]))[0])
-    finite = (float(total(0.101)[0]) - float(total(0.099)[0])) / 0.002
+    grad, finite = eval_gradient(bsdf, "alpha_u.value", 0.1, 0.001, wi, wo)
     assert grad == pytest.approx(finite, rel=1e-3)
 
 
