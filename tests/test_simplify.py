@@ -208,9 +208,16 @@ def test03_llvm_cli_report_nested_and_cache(tmp_path, capsys, monkeypatch):
     error, _ = remeasure(path, out)
     assert error <= TOLERANCE, error
 
-    # another tolerance: every measurement comes from the cache
+    # another tolerance: every candidate's measurement comes from the cache (as the module
+    # promises, a candidate renders again only where its bounds straddle the new tolerance,
+    # and the verification only where the choice changed: which it may, since the choice
+    # depends on the timings' significance)
     result = simplify(path, 0.1, report=report, **SMALL)
-    assert result.renders == 0, result.renders
+    for c in (c for m in result.materials for c in m.candidates if c.ok and c.kind != "original"):
+        assert c.cached or c.bias_lo <= 0.1 < c.bias_hi, c.label
+    if result.renders:
+        assert result.verification is not None and not result.verification.cached, \
+            result.renders
     lobe = next(c for m in result.materials for c in m.candidates
                 if c.label == "diffuse: the glossy lobe left out")
     assert lobe.cached and lobe.bias < 0.1
