@@ -7,7 +7,10 @@ variants Mitsuba calls a Python BSDF once per ray from its C++ render threads, a
 serialise on the GIL. Two render threads fighting for it made a Cornell box 150–200× slower than
 with the built-in ``diffuse``; one thread made it about 20×. So a scalar scene that holds a Python
 plugin renders on one thread per process, with the passes spread over one process per core: this
-one and helpers started for the render, which it keeps rendering beside while they start.
+one and helper processes, which it keeps rendering beside while they start. The helpers stay for
+the next render in the same variant (they keep the last scene they loaded), so a session that
+renders repeatedly pays their start once; :func:`close_helpers` ends them (exit does too). With
+adaptive passes, the last passes shrink so that the processes finish together.
 JIT variants trace the plugin once into a kernel and need none of this.
 """
 
@@ -142,6 +145,10 @@ class _Schedule:
 
     def __init__(self, spp: int | None, pass_spp: int, time_budget: float | None, stop=None):
         self.spp, self.pass_spp, self.budget, self.stop = spp, pass_spp, time_budget, stop
+        #: Processes sharing the passes, when the last passes should shrink so that they
+        #: finish together (guided self-scheduling: each pass at most 1/(2·workers) of what
+        #: remains); 0 keeps every pass at pass_spp (an explicit pass_spp: reproducible images).
+        self.guided_workers = 0
         self.start = time.perf_counter()
         self.issued = 0        # spp handed out so far
         self.index = 0         # passes handed out so far
@@ -164,6 +171,8 @@ class _Schedule:
             if elapsed + typical > self.budget:
                 return None
         k = self.pass_spp if self.spp is None else min(self.pass_spp, self.spp - self.issued)
+        if self.spp is not None and self.guided_workers > 1:
+            k = min(k, max(1, math.ceil((self.spp - self.issued) / (2 * self.guided_workers))))
         item = (self.index, k)
         self.issued += k
         self.index += 1
@@ -260,26 +269,44 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
         if slow_python:
             dr.set_thread_count(1)
             arrangement = "1 thread"
-        item = schedule.next()
-        run_pass(*item)
-        if adaptive:
-            schedule.pass_spp = _timed_pass_spp(schedule.pass_times[0] / item[1], spp)
-        if slow_python:
-            workers = _cores() if processes is None else processes
+        workers = _cores() if processes is None else processes
+        spread = slow_python and workers > 1 and _is_main_process()
+
+        def first_pass() -> float:
+            """The first pass in this process, which times the scene (seconds per spp) for the
+            adaptive pass size."""
+            if (item := schedule.next()) is None:  # (helpers took every pass)
+                return 0.0
+            t0 = time.perf_counter()
+            run_pass(*item)
+            seconds_per_spp = (time.perf_counter() - t0) / item[1]
+            if adaptive:
+                schedule.pass_spp = _timed_pass_spp(seconds_per_spp, spp)
+            return seconds_per_spp
+
+        def spread_over(workers: int, first=None) -> str:
+            if adaptive:
+                schedule.guided_workers = workers
+            _render_with_helpers(workers - 1, variant, path, defines, seed, schedule, run_pass,
+                                 record, first)
+            return f"{workers} processes × 1 thread"
+
+        if spread and _helpers_ready(workers - 1, variant):
+            # helpers kept from the last render: they start at once, the first pass beside them
+            arrangement = spread_over(workers, first_pass)
+        else:
+            seconds_per_spp = first_pass()
             remaining_s = math.inf
             if spp is not None:
-                remaining_s = schedule.pass_times[0] / item[1] * (spp - schedule.issued)
+                remaining_s = seconds_per_spp * (spp - schedule.issued)
             if time_budget is not None:
                 remaining_s = min(remaining_s, time_budget - schedule.pass_times[0])
-            # worth it when starting the workers and splitting the rest beats going on alone;
-            # never from a helper process itself: a script without an ``if __name__ ==
-            # "__main__"`` guard runs again in each spawned helper, which would spawn its own
-            # helpers without end
-            if workers > 1 and WORKER_START_S + remaining_s / workers < 0.9 * remaining_s \
-                    and _is_main_process():
-                arrangement = f"{workers} processes × 1 thread"
-                _render_with_helpers(workers - 1, variant, path, defines, seed, schedule,
-                                     run_pass, record)
+            # worth it when starting the helpers and splitting the rest beats going on alone;
+            # never from a helper process itself (``spread``): a script without an ``if
+            # __name__ == "__main__"`` guard runs again in each spawned helper, which would
+            # spawn its own helpers without end
+            if spread and WORKER_START_S + remaining_s / workers < 0.9 * remaining_s:
+                arrangement = spread_over(workers)
         while (item := schedule.next()) is not None:
             run_pass(*item)
     finally:
@@ -340,36 +367,78 @@ def _render_pass(scene, seed: int, spp: int) -> np.ndarray | None:
 # Scalar renders spread over processes
 # -------------------------------------------------------------------------------------------------
 
-_worker_scene = None
+_worker_scene = None  # (key, scene): the last scene this helper loaded
 _worker_error = None
 
 
-def _worker_init(variant: str, path: str, defines: dict) -> None:
+def _worker_init(variant: str) -> None:
     # The parent handles Ctrl-C and ends us: leave the terminal's process group (Mitsuba would
     # otherwise catch the keypress itself during a render) and ignore SIGINT.
     if hasattr(os, "setpgrp"):
         os.setpgrp()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    global _worker_scene, _worker_error
+    global _worker_error
     try:
         import drjit as dr
 
         import mi_brdfs
-
-        from .scenes import load_scene
         mi_brdfs.use_variant(variant, fallback=False)
         dr.set_thread_count(1)
-        _worker_scene = load_scene(path, defines)
     except Exception as e:  # an initializer that raises makes Pool respawn workers forever
         _worker_error = e
 
 
-def _worker_render(seed: int, spp: int):
+def _worker_render(key: tuple, path: str, defines: dict, seed: int, spp: int):
+    """One pass of the scene ``key`` names (loaded unless it is the last one loaded here)."""
+    global _worker_scene
     if _worker_error is not None:
         raise _worker_error
+    if _worker_scene is None or _worker_scene[0] != key:
+        from .scenes import load_scene
+        _worker_scene = None  # the last scene goes before the next one is loaded
+        _worker_scene = (key, load_scene(path, defines))
     t0 = time.perf_counter()
-    image = _render_pass(_worker_scene, seed, spp)
+    image = _render_pass(_worker_scene[1], seed, spp)
     return image, time.perf_counter() - t0
+
+
+#: The helper processes kept for the next render: ((variant, count), Pool), or None.
+_helpers = None
+
+
+def _helpers_ready(count: int, variant: str) -> bool:
+    """Whether ``count`` helpers of ``variant`` are there from an earlier render."""
+    return count > 0 and _helpers is not None and _helpers[0] == (variant, count)
+
+
+def _helper_pool(count: int, variant: str):
+    """``count`` single-threaded helper processes of ``variant``: those kept from the last
+    render when they match, else new ones (the others are ended)."""
+    global _helpers
+    import multiprocessing as mp
+    if not _helpers_ready(count, variant):
+        close_helpers()
+        _helpers = ((variant, count), mp.get_context("spawn").Pool(count, _worker_init,
+                                                                   (variant,)))
+    return _helpers[1]
+
+
+def close_helpers() -> None:
+    """End the helper processes that scalar renders keep for the next render (if any);
+    the interpreter's exit ends them too."""
+    global _helpers
+    if _helpers is not None:
+        pool, _helpers = _helpers[1], None
+        pool.terminate()
+        pool.join()
+
+
+def _scene_key(path, defines: dict) -> tuple:
+    """What identifies a scene for the helpers: its file (path, size and modification time:
+    an edited file is loaded again) and the defines. Files it includes are not checked, nor
+    the code of plugins the helpers imported: :func:`close_helpers` after editing those."""
+    stat = os.stat(path)
+    return (str(path), stat.st_size, stat.st_mtime_ns, tuple(sorted(defines.items())))
 
 
 def _is_main_process() -> bool:
@@ -382,26 +451,29 @@ def _is_main_process() -> bool:
 
 
 def _render_with_helpers(helpers, variant, path, defines, seed, schedule, run_pass,
-                         record) -> None:
+                         record, first=None) -> None:
     """
-    Run the schedule's remaining passes in this process (``run_pass``) and, as they come up, on
+    Run the schedule's remaining passes in this process (``run_pass``; ``first``, when given,
+    runs here before them, once the helpers have their first pass) and, as they come up, on
     ``helpers`` single-threaded helper processes, each handed its next pass as soon as it
     returns one (``record`` takes their images). This process renders while the helpers
-    import Mitsuba and load the scene, so no core waits for their start.
+    import Mitsuba and load the scene, so no core waits for their start. The helpers are kept
+    for the next render when this one completes; they are ended when it fails or is
+    interrupted (a pass may still be under way in them).
     """
-    import multiprocessing as mp
-
     state = threading.Condition()
     pending, failures = [0], []
-    pool = mp.get_context("spawn").Pool(helpers, _worker_init, (variant, str(path), defines))
+    pool = _helper_pool(helpers, variant)
+    key = _scene_key(path, defines)
 
     def submit() -> None:
         with state:  # not after the pool is closed (failures then holds a None)
             if failures or (item := schedule.next()) is None:
                 return
             index, k = item
-            pool.apply_async(_worker_render, (pass_seed(seed, index), k),
-                             callback=lambda result, k=k: done(result, k), error_callback=failed)
+            args = (key, str(path), defines, pass_seed(seed, index), k)
+            pool.apply_async(_worker_render, args, callback=lambda result, k=k: done(result, k),
+                             error_callback=failed)
             pending[0] += 1
 
     def done(result, k: int) -> None:  # on the pool's result thread
@@ -422,19 +494,22 @@ def _render_with_helpers(helpers, variant, path, defines, seed, schedule, run_pa
             pending[0] -= 1
             state.notify_all()
 
+    complete = False
     try:
         for _ in range(helpers):  # one pass each: a queued pass could overrun a time budget
             submit()
+        if first is not None:
+            first()
         while not failures and (item := schedule.next()) is not None:
             run_pass(*item)
         with state:
             while pending[0] and not failures and not schedule.stop.requested:
                 state.wait(0.1)
+            complete = not pending[0] and not failures
         if failures:
             raise failures[0]
-        pool.close()
     finally:
         with state:
             failures.append(None)  # no more submissions from a late result
-        pool.terminate()
-        pool.join()
+        if not complete:
+            close_helpers()

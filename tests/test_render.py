@@ -111,3 +111,47 @@ def test10_helpers_never_spawn_helpers(tmp_path):
     out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
                          timeout=120, cwd=tmp_path).stdout.split()
     assert sorted(out) == ["helper", "main"], out
+
+
+def test11_guided_passes_shrink_at_the_end():
+    """With workers sharing adaptive passes, the last passes shrink (at most 1/(2·workers) of
+    what remains) so the processes finish together; every spp is issued exactly once."""
+    from mi_brdfs.render import _Schedule
+    plain, guided = _Schedule(40, 8, None), _Schedule(40, 8, None)
+    guided.guided_workers = 2
+    sizes = {}
+    for name, schedule in (("plain", plain), ("guided", guided)):
+        sizes[name] = []
+        while (item := schedule.next()) is not None:
+            sizes[name].append(item[1])
+    assert sizes["plain"] == [8] * 5
+    assert sum(sizes["guided"]) == 40 and sizes["guided"][:2] == [8, 8]
+    assert sizes["guided"][-3:] == [1, 1, 1]  # 3 remaining: ceil(3/4) = 1 per pass
+
+
+def test12_helpers_kept_for_the_next_render(variant_scalar_rgb, monkeypatch, tmp_path):
+    """
+    The helper processes stay for the next render of the variant, which hands them a pass at
+    once (before this process's first); they load a scene again when its file was edited, and
+    close_helpers ends them.
+    """
+    import mi_brdfs.render as R
+    monkeypatch.setattr(R, "WORKER_START_S", 0.0)
+    from mi_brdfs.scenes import scene_path
+    scene, text = tmp_path / "box.xml", scene_path("cbox").read_text()
+    scene.write_text(text)
+    defines = {"res": "8", "material": "lambert", "max_depth": "3"}
+    R.close_helpers()
+    first = render(scene, spp=6, pass_spp=2, defines=defines, processes=2, progress=False)
+    assert first.arrangement == "2 processes × 1 thread" and R._helpers_ready(1, mi.variant())
+    pool = R._helpers[1]
+    # the file edited: the white walls made dark
+    scene.write_text(text.replace("0.885809, 0.698859, 0.666422", "0.1, 0.1, 0.1"))
+    again = render(scene, spp=6, pass_spp=2, defines=defines, processes=2, progress=False)
+    assert R._helpers[1] is pool, "the helpers were not kept"
+    alone = render(scene, spp=6, pass_spp=2, defines=defines, processes=1, progress=False)
+    assert alone.image.mean() < 0.8 * first.image.mean()  # the edit shows
+    np.testing.assert_allclose(again.image, alone.image, rtol=1e-6, atol=1e-7)
+    processes = list(pool._pool)
+    R.close_helpers()
+    assert R._helpers is None and not any(p.is_alive() for p in processes)
