@@ -134,7 +134,8 @@ DIFFERENTIABLE = mi.ParamFlags.Differentiable
 DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
 fres = V.terms(fresnel)
 FRESNEL_TERMS = {"exact": fresnel.exact, "schlick": fresnel.schlick}  # per spectrum
-FRESNEL_FLOATS = {name: getattr(V.terms(fresnel), name) for name in FRESNEL_TERMS}  # per channel
+#: The material's part of each per-channel term (fresnel.exact_at and schlick_at take it).
+FRESNEL_CONSTANTS = {"exact": fres.exact_constants, "schlick": fres.schlick_constants}
 
 
 class CookTorrance(mi.BSDF):
@@ -346,9 +347,8 @@ class CookTorrance(mi.BSDF):
             else diffuse
         #: Sample visible normals (else D·cosθ).
         self.m_sample_visible = _common.boolean(props, PLUGIN, "sample_visible", True)
-        #: F on spectra, and on the per-channel floats of _channels (None for 'none')
+        #: F on spectra (None for 'none'; on the per-channel floats of _channels, see _specular)
         self._fresnel_term = FRESNEL_TERMS.get(self.m_fresnel)
-        self._fresnel_floats = FRESNEL_FLOATS.get(self.m_fresnel)
         self.parameters_changed()
         aniso = ANISOTROPIC if self.m_anisotropic else 0
         if self.m_transmission:  # as roughdielectric: reflection 0, transmission 1, both sides
@@ -637,10 +637,20 @@ class CookTorrance(mi.BSDF):
         """ks·F(cosθ)·factor per channel, F at the cosine between ωi and the facet normal."""
         term = self._fresnel_term
         if self._channels is not None:  # constants as floats: the same terms, per channel
-            term = self._fresnel_floats
+            values = []
             if term is None:
-                return V.spectrum([c * factor for c, _, _ in self._channels])
-            return V.spectrum([c * term(cos_theta, e, k) * factor for c, e, k in self._channels])
+                values = [c * factor for c, _ in self._channels]
+            elif self.m_fresnel == "exact":  # (each call written out: compiled, they inline)
+                inc = fres.incidence(cos_theta)
+                for c, const in self._channels:
+                    f = fres.exact_at(inc, const)
+                    values.append(c * f * factor)
+            else:
+                inc = fres.schlick_incidence(cos_theta)
+                for c, const in self._channels:
+                    f = fres.schlick_at(inc, const)
+                    values.append(c * f * factor)
+            return V.spectrum(values)
         value = self.m_specular_reflectance.eval(si, active) * factor
         if term is not None:
             value = value * term(cos_theta, self.m_eta.eval(si, active),
@@ -730,8 +740,10 @@ class CookTorrance(mi.BSDF):
                         for t in (self.m_specular_reflectance,
                                   self.m_eta if fresnel_on else None,
                                   self.m_k if fresnel_on else None)]
-            if all(c is not None for c in channels):  # (ks, η, k) of each channel
-                self._channels = list(zip(*channels))
+            if all(c is not None for c in channels):  # (ks, F's constants) of each channel
+                constants = FRESNEL_CONSTANTS[self.m_fresnel] if fresnel_on else \
+                    (lambda e, k: None)
+                self._channels = [(ks, constants(e, k)) for ks, e, k in zip(*channels)]
 
     def to_string(self):
         if self.m_transmission:
@@ -760,3 +772,6 @@ class CookTorrance(mi.BSDF):
                 f"  specular_reflectance = {_common.indent(self.m_specular_reflectance)},\n"
                 f"  diffuse_reflectance = {diffuse}\n"
                 f"]")
+
+
+V.specialise_class(CookTorrance)

@@ -93,10 +93,10 @@ def _tan2_alpha2(alpha, v):
     return xy, xy / dr.maximum(dr.square(v.z), _TINY)
 
 
-def _facing(g1, v, m, vm=None):
-    """χ⁺: a microfacet is seen only from its front (v·m, computed if not given), and only
-    from the side of the surface."""
-    return dr.select((dot(v, m) if vm is None else vm) * v.z > 0, g1, 0.0)
+def _facing(g1, v, vm):
+    """χ⁺: a microfacet is seen only from its front (``vm`` = v·m), and only from the side of
+    the surface."""
+    return dr.select(vm * v.z > 0, g1, 0.0)
 
 
 def smith_lambda(kind: str, alpha, v):
@@ -112,7 +112,7 @@ def smith_lambda(kind: str, alpha, v):
 
 def smith_g1(kind: str, alpha, v, m):
     """Smith's masking G1(v, m) = χ⁺ / (1 + Λ(v)), exact for both distributions."""
-    return _facing(1.0 / (1.0 + smith_lambda(kind, alpha, v)), v, m)
+    return _facing(1.0 / (1.0 + smith_lambda(kind, alpha, v)), v, dot(v, m))
 
 
 def smith_g1_mitsuba(kind: str, alpha, v, m, vm=None):
@@ -129,7 +129,10 @@ def smith_g1_mitsuba(kind: str, alpha, v, m, vm=None):
                        (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2))
     else:
         g1 = 2.0 / (1.0 + dr.sqrt(1.0 + t2))
-    return _facing(dr.select(xy == 0, 1.0, g1), v, m, vm)
+    g1 = dr.select(xy == 0, 1.0, g1)
+    if vm is None:  # (None or a value: configuration, not data)
+        vm = dot(v, m)
+    return _facing(g1, v, vm)
 
 
 def vcavity_g1(v, m):
