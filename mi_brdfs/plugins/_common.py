@@ -87,10 +87,12 @@ def variant_tools() -> SimpleNamespace:
 
         def direction(v):
             """A direction for the terms: :class:`~mi_brdfs.scattering.floats.Vec3` (this
-            variant's ``mi.Vector3f`` unpacked directly, the common case: 2× faster)."""
+            variant's ``mi.Vector3f`` unpacked directly, the common case: 2× faster; it keeps
+            the vector, which to_mitsuba gives back)."""
             if type(v) is Vector3f:
                 d = new(Vec3)
                 d.x, d.y, d.z = v
+                d.source = v
                 return d
             return floats.to_vec3(v)
 

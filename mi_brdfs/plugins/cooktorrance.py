@@ -378,7 +378,8 @@ class CookTorrance(mi.BSDF):
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         bs, sample2 = V.new_sample(), V.point2(sample2)
-        lobes = use_mf, use_diffuse = self._lobes(ctx)
+        lobes = self._lobes(ctx)
+        use_mf, use_diffuse = lobes
         wi = V.direction(si.wi)
         if self.m_transmission:
             return self._sample_dielectric(ctx, si, wi, sample1, sample2, active, bs, lobes)
@@ -411,7 +412,8 @@ class CookTorrance(mi.BSDF):
         """:meth:`sample` of the microfacet lobe alone, with the weight in closed form."""
         # a microfacet normal m, and ωo = ωi reflected about it
         m = self._sample_normal(si, wi, active, sample2, sample1)
-        bs.wo = V.to_mitsuba(vec.reflect(wi, m))
+        wo = vec.reflect(wi, m)
+        bs.wo = V.to_mitsuba(wo)
         bs.sampled_type, bs.sampled_component = TYPE_GLOSSY, LOBE_0
         bs.eta = 1.0
         # the terms at bs.wo as stored (float32 in scalar variants), so that bs.pdf = pdf(bs.wo)
@@ -432,23 +434,27 @@ class CookTorrance(mi.BSDF):
 
     def _eval_pdf(self, si, wi, wo, active, lobes, p_microfacet=None):
         """(f·cosθo, pdf of :meth:`sample`) at ``wo``: the enabled lobes and their mixture."""
+        # (the methods on a call's path exit once, at their end: scalar variants compile them
+        # into their callers, see floats.specialise_class)
         use_mf, use_diffuse = lobes
         active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
         if V.none(active):
-            return Spectrum(0.0), Float(0.0)
-        if use_mf:
-            value, pdf = self._microfacet(si, wi, wo, active)
-        if use_diffuse:
-            # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
-            value_d = self.m_diffuse_reflectance.eval(si, active) * dr.inv_pi * wo.z
-            pdf_d = wo.z * dr.inv_pi
+            value, pdf = Spectrum(0.0), Float(0.0)
+        else:
             if use_mf:
-                if p_microfacet is None:
-                    p_microfacet = self._p_microfacet(si, wi, active)
-                value, pdf = value + value_d, mixture.pdf(p_microfacet, pdf, pdf_d)
-            else:
-                value, pdf = value_d, pdf_d
-        return V.select(active, V.depolarize(value), 0.0), V.select(active, pdf, 0.0)
+                value, pdf = self._microfacet(si, wi, wo, active)
+            if use_diffuse:
+                # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
+                value_d = self.m_diffuse_reflectance.eval(si, active) * dr.inv_pi * wo.z
+                pdf_d = wo.z * dr.inv_pi
+                if use_mf:
+                    if p_microfacet is None:
+                        p_microfacet = self._p_microfacet(si, wi, active)
+                    value, pdf = value + value_d, mixture.pdf(p_microfacet, pdf, pdf_d)
+                else:
+                    value, pdf = value_d, pdf_d
+            value, pdf = V.select(active, V.depolarize(value), 0.0), V.select(active, pdf, 0.0)
+        return value, pdf
 
     def _microfacet(self, si, wi, wo, active, weight=False):
         """
@@ -463,8 +469,16 @@ class CookTorrance(mi.BSDF):
         # ωi + ωo vanish (grazing, nearly opposite directions).
         active = active & (cos_im > 0) & (cos_om > 0)
         if V.none(active):
-            return Spectrum(0.0), Float(0.0)
-        kind, alpha = self.m_distribution, self._alpha(si, active)
+            return_value, return_pdf = Spectrum(0.0), Float(0.0)
+        else:
+            return_value, return_pdf = self._microfacet_terms(si, wi, wo, m, cos_im, cos_om,
+                                                              active, weight)
+        return return_value, return_pdf
+
+    def _microfacet_terms(self, si, wi, wo, m, cos_im, cos_om, active, weight):
+        """:meth:`_microfacet` where ωi and ωo see the facet m (cosines ``cos_im``, ``cos_om``)."""
+        kind = self.m_distribution
+        alpha = self._alpha(si, active)
         # D, the masking-shadowing G, and G1(ωi) of the visible normals
         D = mf.ndf(kind, alpha, m)
         if self.m_shadowing == "smith":
@@ -473,7 +487,9 @@ class CookTorrance(mi.BSDF):
             G = g1_wi * g1_wo
         else:
             G = mf.vcavity_g(wi, wo, m)
-            g1_wi = mf.vcavity_g1(wi, m) if self.m_sample_visible else None
+            g1_wi = None
+            if self.m_sample_visible:
+                g1_wi = mf.vcavity_g1(wi, m)
         # the density of ωo: visible normals or D·cosθm, through the reflection's Jacobian
         if self.m_sample_visible:
             pdf = mf.pdf_visible_reflection(D, g1_wi, wi)
@@ -497,10 +513,18 @@ class CookTorrance(mi.BSDF):
         """:meth:`sample` with transmission: a microfacet normal, then reflection with
         probability F, else refraction (Walter et al. 2007, §5.3)."""
         has_r, has_t = lobes
-        cos_i = wi.z
-        active = active & (cos_i != 0.0)
+        active = active & (wi.z != 0.0)
         if V.none(active) or not (has_r or has_t):
-            return bs, Spectrum(0.0)
+            weight = Spectrum(0.0)
+        else:
+            weight = self._sample_dielectric_lobe(ctx, si, wi, sample1, sample2, active, bs,
+                                                  has_r, has_t)
+        return bs, weight
+
+    def _sample_dielectric_lobe(self, ctx, si, wi, sample1, sample2, active, bs, has_r, has_t):
+        """:meth:`_sample_dielectric` where ωi is off the surface and a lobe is enabled: fills
+        ``bs``, returns the weight."""
+        cos_i = wi.z
         # the microfacet normal, seen from ωi turned to the normal's side
         up = V.select(cos_i < 0.0, -1.0, 1.0)
         m = self._sample_normal(si, mi.Vector3f(wi.x * up, wi.y * up, wi.z * up), active,
@@ -511,14 +535,8 @@ class CookTorrance(mi.BSDF):
         F, cos_t, eta_it, eta_ti = fres.dielectric(cos_im, self._eta)
         # the lobe: reflect with probability F when both are enabled
         pick_r = (sample1 <= F) if (has_r and has_t) else has_r
-
-        def reflected():
-            return vec.reflect(wi, m)
-
-        def refracted():
-            return vec.refract(wi, m, cos_t, eta_ti)
-
-        bs.wo = V.to_mitsuba(V.choose(pick_r, reflected, refracted))
+        bs.wo = V.to_mitsuba(V.choose(pick_r, lambda: vec.reflect(wi, m),
+                                      lambda: vec.refract(wi, m, cos_t, eta_ti)))
         bs.eta = V.select(pick_r, 1.0, eta_it)
         bs.sampled_component = V.select(pick_r, LOBE_0, LOBE_1)
         bs.sampled_type = V.select(pick_r, TYPE_GLOSSY, TYPE_GLOSSY_T)
@@ -530,9 +548,9 @@ class CookTorrance(mi.BSDF):
         same_side = cos_i * wo.z > 0.0
         unit = dr.abs(vec.dot(wo, wo) - 1.0) < 1e-3
         active = active & V.select(pick_r, same_side, (cos_i * wo.z < 0.0) & unit)
-        weight, bs.pdf = self._dielectric(si, wi, wo, active, lobes, ctx.mode == RADIANCE,
-                                          weight=True)
-        return bs, V.select(active, V.depolarize(weight), 0.0)
+        weight, bs.pdf = self._dielectric(si, wi, wo, active, (has_r, has_t),
+                                          ctx.mode == RADIANCE, weight=True)
+        return V.select(active, V.depolarize(weight), 0.0)
 
     def _dielectric(self, si, wi, wo, active, lobes, radiance, weight=False):
         """
@@ -556,10 +574,22 @@ class CookTorrance(mi.BSDF):
         # each direction sees the front of the facet from its own side of the surface
         active = active & (cos_i != 0.0) & (cos_im * cos_i > 0.0) & (cos_om * cos_o > 0.0)
         if V.none(active):
-            return Spectrum(0.0), Float(0.0)
-        kind, alpha = self.m_distribution, self._alpha(si, active)
+            return_value, return_pdf = Spectrum(0.0), Float(0.0)
+        else:
+            return_value, return_pdf = self._dielectric_terms(
+                si, wi, wo, m, cos_im, cos_om, reflect, eta, active, lobes, radiance, weight)
+        return return_value, return_pdf
+
+    def _dielectric_terms(self, si, wi, wo, m, cos_im, cos_om, reflect, eta, active, lobes,
+                          radiance, weight):
+        """:meth:`_dielectric` where both directions see the facet m (cosines ``cos_im``,
+        ``cos_om``); ``eta`` is the relative index in the direction of travel."""
+        has_r, has_t = lobes
+        cos_i = wi.z
+        kind = self.m_distribution
+        alpha = self._alpha(si, active)
         D = mf.ndf(kind, alpha, m)
-        F = fres.dielectric(cos_im, self._eta)[0]
+        F, _, _, _ = fres.dielectric(cos_im, self._eta)
         g1_wi = mf.smith_g1_mitsuba(kind, alpha, wi, m, cos_im)
         g1_wo = mf.smith_g1_mitsuba(kind, alpha, wo, m, cos_om)
         lobe_f = V.select(reflect, F, 1.0 - F)
@@ -590,15 +620,10 @@ class CookTorrance(mi.BSDF):
             active = active & (pdf > 0.0)
         else:
             G = g1_wi * g1_wo
-
-            def reflected():
-                return F * D * G / (4.0 * abs_cos_i)
-
-            def refracted():
-                denom = cos_im + eta * cos_om
-                return dr.abs((1.0 - F) * D * G * eta * eta * cos_im * cos_om /
-                              dr.maximum(cos_i * dr.square(denom), -1e30))
-            value = V.scale(factor, V.choose(reflect, reflected, refracted))
+            value = V.scale(factor, V.choose(
+                reflect, lambda: F * D * G / (4.0 * abs_cos_i),
+                lambda: dr.abs((1.0 - F) * D * G * eta * eta * cos_im * cos_om /
+                               dr.maximum(cos_i * dr.square(cos_im + eta * cos_om), -1e30))))
         return V.select(active, value, 0.0), V.select(active, pdf, 0.0)
 
     @staticmethod
@@ -614,19 +639,21 @@ class CookTorrance(mi.BSDF):
     def _lobe_factor(self, si, reflect, eta, radiance, active):
         """ks for a reflection, kt (over η² in radiance transport) for a refraction: spectra,
         or lists of per-channel floats where they are constants (see :meth:`parameters_changed`)."""
-        def reflection():
-            if self._ks_channels is not None:
-                return self._ks_channels
-            return self.m_specular_reflectance.eval(si, active)
+        return V.choose(reflect, lambda: self._reflection_factor(si, active),
+                        lambda: self._refraction_factor(si, eta, radiance, active))
 
-        def refraction():
-            kt = self._kt_channels
-            if kt is not None:
-                return [c / (eta * eta) for c in kt] if radiance else kt
-            kt = self.m_specular_transmittance.eval(si, active)
-            return kt / dr.square(eta) if radiance else kt
+    def _reflection_factor(self, si, active):
+        """ks (:meth:`_lobe_factor`)."""
+        ks = self._ks_channels
+        return ks if ks is not None else self.m_specular_reflectance.eval(si, active)
 
-        return V.choose(reflect, reflection, refraction)
+    def _refraction_factor(self, si, eta, radiance, active):
+        """kt, over η² in radiance transport (:meth:`_lobe_factor`)."""
+        kt = self._kt_channels
+        if kt is not None:
+            return [c / (eta * eta) for c in kt] if radiance else kt
+        kt = self.m_specular_transmittance.eval(si, active)
+        return kt / dr.square(eta) if radiance else kt
 
     def _widened(self, alpha, cos_i):
         """α widened for D·cos sampling through a dielectric (mf.walter_widening)."""
@@ -639,22 +666,24 @@ class CookTorrance(mi.BSDF):
         if self._channels is not None:  # constants as floats: the same terms, per channel
             values = []
             if term is None:
-                values = [c * factor for c, _ in self._channels]
+                for ks, _ in self._channels:
+                    values.append(ks * factor)
             elif self.m_fresnel == "exact":  # (each call written out: compiled, they inline)
-                inc = fres.incidence(cos_theta)
-                for c, const in self._channels:
-                    f = fres.exact_at(inc, const)
-                    values.append(c * f * factor)
+                c, c2, s2 = fres.incidence(cos_theta)
+                for ks, (e2k2, ek4) in self._channels:
+                    f = fres.exact_at(c, c2, s2, e2k2, ek4)
+                    values.append(ks * f * factor)
             else:
                 inc = fres.schlick_incidence(cos_theta)
-                for c, const in self._channels:
+                for ks, const in self._channels:
                     f = fres.schlick_at(inc, const)
-                    values.append(c * f * factor)
-            return V.spectrum(values)
-        value = self.m_specular_reflectance.eval(si, active) * factor
-        if term is not None:
-            value = value * term(cos_theta, self.m_eta.eval(si, active),
-                                 self.m_k.eval(si, active))
+                    values.append(ks * f * factor)
+            value = V.spectrum(values)
+        else:
+            value = self.m_specular_reflectance.eval(si, active) * factor
+            if term is not None:
+                value = value * term(cos_theta, self.m_eta.eval(si, active),
+                                     self.m_k.eval(si, active))
         return value
 
     def _p_microfacet(self, si, wi, active):
@@ -668,27 +697,29 @@ class CookTorrance(mi.BSDF):
         """A microfacet normal: D·cosθ (with ``widen``, of the widened α of a dielectric),
         Smith's visible normals of ωi, or the V-cavity's (whose facet of the V-groove
         ``u_facet`` picks)."""
-        kind, alpha = self.m_distribution, self._alpha(si, active)
+        kind = self.m_distribution
+        alpha = self._alpha(si, active)
         if not self.m_sample_visible:
-            return mf.sample_ndf(kind, self._widened(alpha, wi.z) if widen else alpha, sample2)
-        if self.m_shadowing == "smith":
-            return mf.sample_visible(kind, alpha, wi, sample2, self._distr)
-        return mf.sample_vcavity_visible(kind, alpha, wi, sample2, u_facet)
+            m = mf.sample_ndf(kind, self._widened(alpha, wi.z) if widen else alpha, sample2)
+        elif self.m_shadowing == "smith":
+            m = mf.sample_visible(kind, alpha, wi, sample2, self._distr)
+        else:
+            m = mf.sample_vcavity_visible(kind, alpha, wi, sample2, u_facet)
+        return m
 
     def _lobes(self, ctx):
         """Which lobes the context enables: (microfacet, diffuse), or with transmission
         (reflection, refraction)."""
-        if self.m_transmission:
-            return ctx.is_enabled(GLOSSY, 0), ctx.is_enabled(GLOSSY_T, 1)
-        return (ctx.is_enabled(GLOSSY, 0),
-                self.m_diffuse_reflectance is not None and ctx.is_enabled(DIFFUSE, 1))
+        second = ctx.is_enabled(GLOSSY_T, 1) if self.m_transmission else \
+            self.m_diffuse_reflectance is not None and ctx.is_enabled(DIFFUSE, 1)
+        return ctx.is_enabled(GLOSSY, 0), second
 
     def _alpha(self, si, active):
         """α at ``si`` (the pair (αu, αv) when anisotropic), clamped to mf.ALPHA_MIN as
         Mitsuba clamps it."""
-        if self._alpha_const is not None:
-            return self._alpha_const
-        return _common.alpha_at(self.m_alpha_u, self.m_alpha_v, si, active)
+        alpha = self._alpha_const
+        return alpha if alpha is not None else \
+            _common.alpha_at(self.m_alpha_u, self.m_alpha_v, si, active)
 
     def eval_diffuse_reflectance(self, si, active=True):
         # The default, eval(wo = n)·π, would count the glossy lobe

@@ -56,7 +56,6 @@ from __future__ import annotations
 import __future__
 
 import ast
-import copy
 import inspect
 import itertools
 import sys
@@ -86,6 +85,21 @@ CONSTANTS = ("pi", "inv_pi", "two_pi", "inv_two_pi", "four_pi", "inv_four_pi", "
 _cache: dict = {}
 
 
+def _copy(node):
+    """A copy of a syntax tree (``copy.deepcopy`` does the same, five times slower)."""
+    if isinstance(node, ast.AST):
+        new = node.__class__.__new__(node.__class__)
+        for field in node._fields:
+            setattr(new, field, _copy(getattr(node, field, None)))
+        for attribute in node._attributes:
+            if hasattr(node, attribute):
+                setattr(new, attribute, getattr(node, attribute))
+        return new
+    if isinstance(node, list):
+        return [_copy(item) for item in node]
+    return node
+
+
 class _Rewrite(ast.NodeTransformer):
     """The rewrites of the module docstring's table, on one module's syntax tree."""
 
@@ -105,14 +119,22 @@ class _Rewrite(ast.NodeTransformer):
         self.bodies = {} if bodies is None else bodies
         #: the globals the compiled code needs for the bodies it took in: name -> value
         self.injected: dict = {}
-        self._bound: list[set] = []  # the names each enclosing function binds
+        self.taken = 0  # bodies taken in so far
+        self._bound: list = []  # the names each enclosing function binds (_Lazy)
 
     def visit_FunctionDef(self, node):
-        self._bound.append(_bound_names(node))
+        self._bound.append(_Lazy(node))
         try:
             return self.generic_visit(node)
         finally:
             self._bound.pop()
+
+    def _comprehension(self, node):
+        """Comprehensions are kept as they are: a rewrite may bring in an assignment
+        expression, which Python forbids in a comprehension's iterable."""
+        return node
+
+    visit_ListComp = visit_SetComp = visit_DictComp = visit_GeneratorExp = _comprehension
 
     def visit_Name(self, node):
         if (isinstance(node.ctx, ast.Load) and node.id in self.constants
@@ -125,6 +147,8 @@ class _Rewrite(ast.NodeTransformer):
         (a name the function binds itself)."""
         if isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name):
             key, name = (func.value.id, func.attr), func.value.id
+            if name == "self":  # (a method's own first parameter: specialise_class)
+                return key
         elif isinstance(func, ast.Name):
             key = name = func.id
         else:
@@ -143,7 +167,7 @@ class _Rewrite(ast.NodeTransformer):
         for sub in ast.walk(expr):
             if isinstance(sub, ast.NamedExpr):
                 names[sub.target.id] = next(self._names)
-        out = _Substitute(dict(zip(params, node.args)), names).visit(copy.deepcopy(expr))
+        out = _Substitute(dict(zip(params, node.args)), names).visit(_copy(expr))
         return ast.copy_location(out, node)
 
     def visit_Assign(self, node):
@@ -170,8 +194,8 @@ class _Rewrite(ast.NodeTransformer):
         expression it returns; every name it binds renamed to a name of its own, the globals
         of another module's term bound in :attr:`injected`. None for other calls.
         """
-        if not isinstance(call, ast.Call) or call.keywords or \
-                any(isinstance(a, ast.Starred) for a in call.args):
+        if not isinstance(call, ast.Call) or any(isinstance(a, ast.Starred) for a in call.args) \
+                or any(k.arg is None for k in call.keywords):
             return None
         key = self._key(call.func)
         entry = self.bodies.get(key) if key is not None else None
@@ -179,17 +203,35 @@ class _Rewrite(ast.NodeTransformer):
             return None
         fn, home = entry
         params, defaults = [p.arg for p in fn.args.args], fn.args.defaults
-        given = len(call.args)
-        if not len(params) - len(defaults) <= given <= len(params):
+        args = list(call.args)
+        if type(key) is tuple and key[0] == "self":  # a method: self is its first argument
+            args.insert(0, ast.Name("self", ast.Load()))
+        # each parameter's argument: positional, by keyword, or the default
+        defaults = dict(zip(params[len(params) - len(defaults):], defaults))
+        keywords = {k.arg: k.value for k in call.keywords}
+        if len(args) > len(params) or set(keywords) - set(params[len(args):]):
             return None
-        args = list(call.args) + [copy.deepcopy(d) for d in
-                                  defaults[len(defaults) - (len(params) - given):]]
+        for p in params[len(args):]:
+            if p not in keywords and p not in defaults:
+                return None
+            args.append(keywords[p] if p in keywords else _copy(defaults[p]))
         body = _docless(fn.body)
-        stored = {n.id for stmt in body for n in ast.walk(stmt)
+        nodes = [n for stmt in body for n in ast.walk(stmt)]
+        stored = {n.id for n in nodes
                   if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Load)}
+        if home is None:  # this module's globals: a name the caller binds would hide one
+            free = {n.id for n in nodes if isinstance(n, ast.Name)} - stored - set(params)
+            if any(name in bound for name in free for bound in self._bound):
+                return None
         tag = next(_unique)
         rename = {n: f"_i{tag}_{n}" for n in stored | set(params)}
-        put = {p: a for p, a in zip(params, args) if p not in stored and _simple(a)}
+        # an argument is put in directly where its value cannot change before the body reads
+        # it: a name or constant (the body's own names are renamed), or an attribute where
+        # the body neither stores an attribute nor calls anything
+        changes = any(isinstance(n, ast.Call) or (isinstance(n, ast.Attribute) and
+                                                 not isinstance(n.ctx, ast.Load)) for n in nodes)
+        put = {p: a for p, a in zip(params, args) if p not in stored and _simple(a)
+               and (not changes or not isinstance(a, ast.Attribute))}
         statements = [ast.Assign([ast.Name(rename[p], ast.Store())], a)
                       for p, a in zip(params, args) if p not in put]
         free = {}
@@ -200,10 +242,11 @@ class _Rewrite(ast.NodeTransformer):
                     free[name] = f"_g{next(_unique)}"
                     self.injected[free[name]] = home[name]
         out = _Substitute(put, {**rename, **free})
-        statements += [out.visit(copy.deepcopy(stmt)) for stmt in body[:-1]]
-        result = out.visit(copy.deepcopy(body[-1].value))
+        statements += [out.visit(_copy(stmt)) for stmt in body[:-1]]
+        result = out.visit(_copy(body[-1].value))
         for stmt in statements:
             ast.copy_location(stmt, call)
+        self.taken += 1
         return statements, result
 
     def _tools_call(self, node):
@@ -216,11 +259,11 @@ class _Rewrite(ast.NodeTransformer):
         if name == "select" and len(args) == 3:
             c, a, b = args
             if _simple(a):
-                first, again = a, copy.deepcopy(a)
+                first, again = a, _copy(a)
             else:  # a in each branch, evaluated in the one taken
                 t = next(self._names)
                 first = ast.NamedExpr(ast.Name(t, ast.Store()), a)
-                again = ast.NamedExpr(ast.Name(t, ast.Store()), copy.deepcopy(a))
+                again = ast.NamedExpr(ast.Name(t, ast.Store()), _copy(a))
             other = ast.Call(ast.Call(ast.Name("type", ast.Load()), [again], []), [b], [])
             return ast.IfExp(test=c, body=first, orelse=other)
         if name == "choose" and len(args) == 3:
@@ -305,7 +348,7 @@ class _Substitute(ast.NodeTransformer):
 
     def visit_Name(self, node):
         if node.id in self.nodes:
-            return copy.deepcopy(self.nodes[node.id])
+            return _copy(self.nodes[node.id])
         if node.id in self.rename:
             return ast.copy_location(ast.Name(self.rename[node.id], node.ctx), node)
         return node
@@ -322,16 +365,36 @@ def _simple(node) -> bool:
 
 
 def _bound_names(fn) -> set[str]:
-    """The names a function binds: its parameters and every name it stores (nested
-    functions included)."""
-    names = {a.arg for a in (*fn.args.posonlyargs, *fn.args.args, *fn.args.kwonlyargs)}
-    names |= {a.arg for a in (fn.args.vararg, fn.args.kwarg) if a is not None}
+    """The names a function binds: its parameters and every name it stores, with those of
+    the functions and lambdas nested in it (their parameters of every kind), ``except ... as``
+    and ``import ... as``."""
+    names = set()
     for sub in ast.walk(fn):
         if isinstance(sub, ast.Name) and isinstance(sub.ctx, (ast.Store, ast.Del)):
             names.add(sub.id)
-        elif isinstance(sub, (ast.FunctionDef, ast.Lambda)) and sub is not fn:
-            names |= {a.arg for a in sub.args.args}
+        elif isinstance(sub, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            a = sub.args
+            names |= {p.arg for p in (*a.posonlyargs, *a.args, *a.kwonlyargs)}
+            names |= {p.arg for p in (a.vararg, a.kwarg) if p is not None}
+            if sub is not fn and not isinstance(sub, ast.Lambda):
+                names.add(sub.name)
+        elif isinstance(sub, ast.ExceptHandler) and sub.name:
+            names.add(sub.name)
+        elif isinstance(sub, (ast.Import, ast.ImportFrom)):
+            names |= {(alias.asname or alias.name).split(".")[0] for alias in sub.names}
     return names
+
+
+class _Lazy:
+    """:func:`_bound_names` of a function, computed when first asked (most visits never ask)."""
+
+    def __init__(self, fn):
+        self.fn, self.names = fn, None
+
+    def __contains__(self, name) -> bool:
+        if self.names is None:
+            self.names = _bound_names(self.fn)
+        return name in self.names
 
 
 #: Numbers for the names that inlined bodies bind, unique across every compiled function.
@@ -409,10 +472,13 @@ class Vec3:
     ``mi.Vector3f``, and the terms read dozens per call). Iterable, like ``mi.Vector3f``.
     """
 
-    __slots__ = ("x", "y", "z")
+    __slots__ = ("x", "y", "z", "source")
 
     def __init__(self, x, y, z):
         self.x, self.y, self.z = x, y, z
+        #: the ``mi.Vector3f`` these floats were read from (:func:`to_mitsuba` returns it),
+        #: or None
+        self.source = None
 
     def __iter__(self):
         return iter((self.x, self.y, self.z))
@@ -430,12 +496,27 @@ def to_vec3(v) -> Vec3:
 
 
 def to_mitsuba(v):
-    """A direction as the current variant's ``mi.Vector3f`` (a :class:`Vec3` is converted)."""
-    return v if type(v) is not Vec3 else mi.Vector3f(v.x, v.y, v.z)
+    """A direction as the current variant's ``mi.Vector3f`` (a :class:`Vec3` is converted, or
+    gives back the vector it was read from)."""
+    if type(v) is not Vec3:
+        return v
+    return v.source if v.source is not None else mi.Vector3f(v.x, v.y, v.z)
+
+
+_new = object.__new__
+
+
+def read_vector(v) -> Vec3:
+    """A direction from one of Mitsuba's functions (a ``mi.Vector3f`` or ``mi.Normal3f``) as
+    a :class:`Vec3` of its floats, read once: what ``vector.terms_vector`` becomes."""
+    d = _new(Vec3)
+    d.x, d.y, d.z = v
+    d.source = None
+    return d
 
 
 #: Functions of the terms that the compiled modules replace (by name).
-OVERRIDES = {"mitsuba_vector": to_mitsuba}
+OVERRIDES = {"mitsuba_vector": to_mitsuba, "terms_vector": read_vector}
 
 
 def specialise(module: ModuleType) -> SimpleNamespace:
@@ -443,7 +524,7 @@ def specialise(module: ModuleType) -> SimpleNamespace:
     The functions of ``module`` compiled for Python floats (see the module docstring), as a
     namespace with the same names; its other public names are shared. Cached per module and
     variant. The namespace's ``_inline`` and ``_bodies`` hold the terms that callers may
-    inline and whose bodies they may take in, ``_source`` the compiled source.
+    inline and whose bodies they may take in (:func:`compiled_source` gives its source).
     """
     key = (module.__name__, mi.variant())
     if key in _cache:
@@ -477,6 +558,9 @@ def specialise(module: ModuleType) -> SimpleNamespace:
             elif _body(node):
                 bodies[node.name] = (node, None)  # (this module's globals)
                 own_bodies[node.name] = node
+    kinds = _kinds({**namespace, **{n: f for n, f in OVERRIDES.items() if n in namespace},
+                    **_helpers(rewrite), **rewrite.injected})
+    functions = [_scalarise(_unbox(node, kinds, None)) for node in functions]
     code = compile(ast.fix_missing_locations(ast.Module(functions, [])),
                    f"<{module.__name__} for floats>", "exec",
                    flags=__future__.annotations.compiler_flag, dont_inherit=True)
@@ -488,20 +572,242 @@ def specialise(module: ModuleType) -> SimpleNamespace:
     for name in dir(module):  # constants and other public names, shared
         if not name.startswith("__") and not hasattr(result, name):
             setattr(result, name, namespace.get(name, getattr(module, name)))
-    result._inline, result._source = own, ast.unparse(ast.Module(functions, []))
+    result._inline, result._compiled = own, ast.Module(functions, [])
     result._bodies = {name: (node, namespace) for name, node in own_bodies.items()}
     _cache[key] = result
     return result
+
+
+#: The attributes :func:`_scalarise` reads into local names.
+_COMPONENTS = ("x", "y", "z")
+
+
+class _Census:
+    """What :func:`_unbox` and :func:`_scalarise` need to know of a function, in one walk:
+    how often each name is stored, the values of its plain assignments, the names read as
+    ``v.x``, ``v.y``, ``v.z`` (and how often), those stored as components, the names that
+    nested scopes use, and its parameters."""
+
+    def __init__(self, fn):
+        self.stores: dict[str, int] = {}
+        self.assigned: dict[str, list] = {}
+        self.reads: dict[str, dict[str, int]] = {}
+        self.component_names: set[int] = set()  # ids of the Name nodes of v.x, v.y, v.z
+        self.written: set[str] = set()
+        self.nested: set[str] = set()
+        self.loads: list = []  # every Name node read
+        self.calls: list = []
+        for node in ast.walk(fn):
+            kind = type(node)
+            if kind is ast.Name:
+                if isinstance(node.ctx, ast.Load):
+                    self.loads.append(node)
+                else:
+                    self.stores[node.id] = self.stores.get(node.id, 0) + 1
+            elif kind is ast.Attribute:
+                if isinstance(node.value, ast.Name) and node.attr in _COMPONENTS:
+                    if isinstance(node.ctx, ast.Load):
+                        counts = self.reads.setdefault(node.value.id, {})
+                        counts[node.attr] = counts.get(node.attr, 0) + 1
+                        self.component_names.add(id(node.value))
+                    else:
+                        self.written.add(node.value.id)
+            elif kind is ast.Assign:
+                if len(node.targets) == 1 and isinstance(node.targets[0], ast.Name):
+                    self.assigned.setdefault(node.targets[0].id, []).append(node.value)
+            elif kind is ast.Call:
+                self.calls.append(node)
+            elif kind in (ast.FunctionDef, ast.Lambda) and node is not fn:
+                self.nested |= {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+        a = fn.args
+        self.params = {p.arg for p in (*a.posonlyargs, *a.args, *a.kwonlyargs)}
+
+
+def _scalarise(fn: ast.FunctionDef) -> ast.FunctionDef:
+    """
+    Read the components of a direction into local names once: for a local name ``v`` that
+    ``fn`` assigns exactly once, in a plain ``v = ...`` outside any loop, never in a nested
+    scope, and whose ``v.x``, ``v.y``, ``v.z`` it reads at least four times in all (and never
+    stores), ``v_x, v_y, ... = v.x, v.y, ...`` follows the assignment and the reads become
+    the names (an attribute read of a :class:`Vec3` costs about five times a local's). The
+    value is the same: the terms never change a vector once it is made.
+    """
+    c = _Census(fn)
+    chosen = {name: sorted(counts) for name, counts in c.reads.items()
+              if sum(counts.values()) >= 4 and c.stores.get(name) == 1
+              and name not in c.params | c.nested | c.written}
+    if not chosen:
+        return fn
+
+    class Insert(ast.NodeTransformer):
+        def __init__(self):
+            self.loops = 0
+
+        def _block(self, statements):
+            out = []
+            for stmt in statements:
+                stmt = self.visit(stmt)
+                out.extend(stmt if isinstance(stmt, list) else [stmt])
+                if (self.loops == 0 and isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
+                        and isinstance(stmt.targets[0], ast.Name)
+                        and stmt.targets[0].id in chosen):
+                    name = stmt.targets[0].id
+                    attrs = chosen[name]
+                    out.append(ast.copy_location(ast.Assign(
+                        [ast.Tuple([ast.Name(f"{name}__{a}", ast.Store()) for a in attrs],
+                                   ast.Store())],
+                        ast.Tuple([ast.Attribute(ast.Name(name, ast.Load()), a, ast.Load())
+                                   for a in attrs], ast.Load())), stmt))
+                    done.add(name)
+            return out
+
+        def generic_visit(self, node):
+            loop = isinstance(node, (ast.For, ast.While, ast.AsyncFor))
+            self.loops += loop
+            for field in ("body", "orelse", "finalbody"):
+                if isinstance(getattr(node, field, None), list) and \
+                        all(isinstance(s, ast.stmt) for s in getattr(node, field)):
+                    setattr(node, field, self._block(getattr(node, field)))
+            for field, value in ast.iter_fields(node):
+                if field in ("body", "orelse", "finalbody"):
+                    continue
+                if isinstance(value, ast.AST):
+                    setattr(node, field, Reads().visit(value))
+                elif isinstance(value, list):
+                    setattr(node, field, [Reads().visit(v) if isinstance(v, ast.AST) else v
+                                          for v in value])
+            self.loops -= loop
+            return node
+
+    class Reads(ast.NodeTransformer):
+        def visit_Attribute(self, node):
+            if (isinstance(node.value, ast.Name) and node.value.id in done
+                    and node.attr in _COMPONENTS and isinstance(node.ctx, ast.Load)):
+                return ast.copy_location(ast.Name(f"{node.value.id}__{node.attr}", ast.Load()),
+                                         node)
+            return self.generic_visit(node)
+
+    done: set[str] = set()
+    fn.body = Insert()._block(fn.body)
+    return fn
+
+
+def _unbox(fn: ast.FunctionDef, kinds: dict, tools: str | None) -> ast.FunctionDef:
+    """
+    Keep a direction as three local names instead of a :class:`Vec3`, where ``fn`` only reads
+    its components or hands it to Mitsuba: for a local name ``v`` assigned once (never in a
+    nested scope) by a constructor of :class:`Vec3`, by :func:`read_vector` or by the variant
+    tools' ``direction``, and otherwise only read as ``v.x``, ``v.y``, ``v.z`` or passed
+    alone to :func:`to_mitsuba` (or the tools' ``to_mitsuba``), the assignment becomes
+    ``v__x, v__y, v__z = ...`` (the constructor's arguments, or the floats of the direction:
+    a ``mi.Vector3f``'s directly, anything else through ``direction``), the reads the names,
+    and ``to_mitsuba(v)`` a ``mi.Vector3f`` of them. ``kinds`` names the globals that are
+    :class:`Vec3` ('new'), :func:`read_vector` ('read') and :func:`to_mitsuba` ('out').
+    """
+    def kind(func) -> str | None:
+        """What a callee is: 'new', 'read', 'direction', 'out' or None."""
+        if isinstance(func, ast.Name):
+            return kinds.get(func.id)
+        if (tools and isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name)
+                and func.value.id == tools):
+            return {"direction": "direction", "to_mitsuba": "out"}.get(func.attr)
+        return None
+
+    def made(value) -> str | None:
+        if not isinstance(value, ast.Call) or value.keywords or \
+                any(isinstance(a, ast.Starred) for a in value.args):
+            return None
+        k = kind(value.func)
+        wanted = {"new": 3, "read": 1, "direction": 1}
+        return k if k in wanted and len(value.args) == wanted[k] else None
+
+    c = _Census(fn)
+    uses = set(c.component_names)  # ids of the Name nodes read as v.x, ... or to_mitsuba(v)
+    uses |= {id(call.args[0]) for call in c.calls
+             if kind(call.func) == "out" and len(call.args) == 1 and not call.keywords
+             and isinstance(call.args[0], ast.Name)}
+    bare = {name.id for name in c.loads if id(name) not in uses}  # names loaded otherwise
+    assigned = c.assigned
+    # every store of a chosen name is 'v = <a maker>' or 'v = w' of another chosen name w
+    chosen = {name for name, values in assigned.items()
+              if len(values) == c.stores.get(name) and name not in c.params | c.nested
+              and all(made(v) or isinstance(v, ast.Name) for v in values)}
+    while True:  # a copy of a name that is not chosen is no maker: drop until none is left
+        keep = {name for name in chosen if name not in bare and all(
+            made(v) or v.id in chosen for v in assigned[name])}
+        bare |= {v.id for name in chosen - keep for v in assigned[name]
+                 if isinstance(v, ast.Name)}
+        if keep == chosen:
+            break
+        chosen = keep
+    if not chosen:
+        return fn
+
+    def parts(name, ctx):
+        return [ast.Name(f"{name}__{a}", ctx()) for a in _COMPONENTS]
+
+    class Unbox(ast.NodeTransformer):
+        def visit_Assign(self, node):
+            self.generic_visit(node)
+            if not (len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
+                    and node.targets[0].id in chosen):
+                return node
+            name, value = node.targets[0].id, node.value
+            how = made(value)
+            if isinstance(value, ast.Name):  # a copy of another chosen name
+                out = ast.Tuple(parts(value.id, ast.Load), ast.Load())
+            elif how == "new":
+                out = ast.Tuple(value.args, ast.Load())
+            elif how == "read":  # a Mitsuba vector or normal: its floats, read once
+                out = value.args[0]
+            else:  # a mi.Vector3f's floats directly; anything else through direction()
+                arg = value.args[0]
+                if isinstance(arg, ast.Name):
+                    first, again = arg, ast.Name(arg.id, ast.Load())
+                else:
+                    t = f"_u{next(_unique)}"
+                    first = ast.NamedExpr(ast.Name(t, ast.Store()), arg)
+                    again = ast.Name(t, ast.Load())
+                out = ast.IfExp(
+                    test=ast.Compare(ast.Call(ast.Name("type", ast.Load()), [first], []),
+                                     [ast.Is()], [ast.Name("_mi_vector_class", ast.Load())]),
+                    body=_copy(again),
+                    orelse=ast.Call(value.func, [_copy(again)], []))
+            target = ast.Tuple(parts(name, ast.Store), ast.Store())
+            return ast.copy_location(ast.Assign([target], out), node)
+
+        def visit_Call(self, node):
+            if (kind(node.func) == "out" and len(node.args) == 1 and not node.keywords
+                    and isinstance(node.args[0], ast.Name) and node.args[0].id in chosen):
+                return ast.copy_location(ast.Call(ast.Name("_mi_vector_class", ast.Load()),
+                                                  parts(node.args[0].id, ast.Load), []), node)
+            return self.generic_visit(node)
+
+        def visit_Attribute(self, node):
+            if (isinstance(node.value, ast.Name) and node.value.id in chosen
+                    and node.attr in _COMPONENTS and isinstance(node.ctx, ast.Load)):
+                return ast.copy_location(ast.Name(f"{node.value.id}__{node.attr}", ast.Load()),
+                                         node)
+            return self.generic_visit(node)
+
+    return Unbox().visit(fn)
 
 
 def _helpers(rewrite: _Rewrite) -> dict:
     """The names the rewritten code refers to: ``_math``, ``_dr`` and the bound ``mi.<name>``
     (``mi.Vector3f`` as :class:`Vec3`)."""
     names = {f"_mi_{name}": getattr(mi, name) for name in rewrite.mitsuba}
-    names.update(_math=math, _dr=dr)
+    names.update(_math=math, _dr=dr, _mi_vector_class=mi.Vector3f)
     if "Vector3f" in rewrite.mitsuba:
         names["_mi_Vector3f"] = Vec3
     return names
+
+
+def _kinds(names: dict) -> dict:
+    """The names among ``names`` (name -> value) bound to :class:`Vec3` ('new'),
+    :func:`read_vector` ('read') and :func:`to_mitsuba` ('out'), for :func:`_unbox`."""
+    known = ((Vec3, "new"), (read_vector, "read"), (to_mitsuba, "out"))
+    return {name: k for name, value in names.items() for obj, k in known if value is obj}
 
 
 def specialise_class(cls: type, tools: str = "V", skip=("__init__",)) -> type:
@@ -509,10 +815,12 @@ def specialise_class(cls: type, tools: str = "V", skip=("__init__",)) -> type:
     ``cls`` with its methods compiled for Python floats, in place: the rewrites of
     :func:`specialise`, the inlining of the terms of the compiled modules it holds as module
     globals (``mf = V.terms(microfacet)``; ``mf.pdf_ndf(d, m)`` becomes ``d * m.z``) and the
-    rewrites of the variant tools ``tools`` (the module docstring's second table). Methods in
-    ``skip``, and those that use ``super`` or ``__class__``, are kept. The originals stay in
-    ``cls.__generic_methods__`` (for tests), the compiled source in
-    ``cls.__compiled_source__``. For scalar variants only: the rewrites assume the
+    rewrites of the variant tools ``tools`` (the module docstring's second table), and then
+    the bodies of its single-exit methods taken in where another method calls them on
+    ``self`` (so a method replaced on an instance or subclass is not seen by the others).
+    Methods in ``skip``, and those that use ``super`` or ``__class__``, are kept. The
+    originals stay in ``cls.__generic_methods__`` (for tests); :func:`compiled_source` gives
+    the compiled source. For scalar variants only: the rewrites assume the
     values of ``dr.maximum``, ``dr.minimum`` and ``dr.select`` in the methods are numbers.
     """
     module = sys.modules[cls.__module__]
@@ -531,6 +839,31 @@ def specialise_class(cls: type, tools: str = "V", skip=("__init__",)) -> type:
                    isinstance(n, ast.Name) and n.id in ("super", "__class__")
                    for n in ast.walk(node))]
     methods = [rewrite.visit(node) for node in methods]
+    # then the bodies of its own single-exit methods taken in where they are called on self
+    # (static methods and the kept ones excepted), callees finished before their callers
+    by_name = {node.name: node for node in methods}
+    eligible = {name for name, node in by_name.items() if _body(node)}
+    callees = {name: {n.func.attr for n in ast.walk(node) if isinstance(n, ast.Call)
+                      and isinstance(n.func, ast.Attribute) and isinstance(n.func.value, ast.Name)
+                      and n.func.value.id == "self" and n.func.attr in eligible}
+               for name, node in by_name.items()}
+    finished: dict = {}
+
+    def finish(name, path=()):
+        """Take in the bodies of ``name``'s callees, each finished first (callees before
+        callers: one pass; a call back into the path stays a call)."""
+        if name in finished:
+            return
+        for callee in callees[name] - {name, *path}:
+            finish(callee, (*path, name))
+        own = {("self", c): (finished[c], None) for c in callees[name] if c in finished}
+        finished[name] = _Rewrite(bodies=own).visit(by_name[name]) if own else by_name[name]
+
+    for name in by_name:
+        finish(name)
+    methods = [finished[node.name] for node in methods]
+    kinds = _kinds({**_helpers(rewrite), **rewrite.injected})
+    methods = [_scalarise(_unbox(node, kinds, tools)) for node in methods]
     code = compile(ast.fix_missing_locations(ast.Module(methods, [])),
                    f"<{module.__name__}.{cls.__name__} for floats>", "exec",
                    flags=__future__.annotations.compiler_flag, dont_inherit=True)
@@ -539,7 +872,14 @@ def specialise_class(cls: type, tools: str = "V", skip=("__init__",)) -> type:
     compiled: dict = {}
     exec(code, g, compiled)  # noqa: S102 - the package's own source, rewritten above
     cls.__generic_methods__ = {name: vars(cls)[name] for name in compiled}
-    cls.__compiled_source__ = ast.unparse(ast.Module(methods, []))
+    cls.__compiled__ = ast.Module(methods, [])
     for name, fn in compiled.items():
         setattr(cls, name, fn)
     return cls
+
+
+def compiled_source(compiled) -> str:
+    """The source :func:`specialise` (its namespace) or :func:`specialise_class` (the class)
+    compiled, as Python text: what runs in scalar variants."""
+    tree = compiled._compiled if isinstance(compiled, SimpleNamespace) else compiled.__compiled__
+    return ast.unparse(tree)

@@ -34,7 +34,9 @@ _TINY = 1e-30
 
 def exact(cos_theta_i, eta, k):
     """Unpolarised Fresnel reflectance at incidence cosθi ∈ [0, 1], exact, per channel."""
-    return exact_at(incidence(cos_theta_i), exact_constants(eta, k))
+    c, c2, s2 = incidence(cos_theta_i)
+    e2k2, ek4 = exact_constants(eta, k)
+    return exact_at(c, c2, s2, e2k2, ek4)
 
 
 def incidence(cos_theta_i):
@@ -51,13 +53,11 @@ def exact_constants(eta, k):
     return eta * eta - k * k, 4.0 * ek * ek
 
 
-def exact_at(inc, const):
-    """:func:`exact` from its parts, ``inc`` of :func:`incidence` and ``const`` of
-    :func:`exact_constants`: a renderer that keeps constant η, k per channel computes the
+def exact_at(c, c2, s2, e2k2, ek4):
+    """:func:`exact` from its parts, (c, c², sin²θ) of :func:`incidence` and (η² − k², 4η²k²)
+    of :func:`exact_constants`: a renderer that keeps constant η, k per channel computes the
     constants once and the incidence once per direction (the same operations, in the same
     order, as :func:`exact`)."""
-    c, c2, s2 = inc
-    e2k2, ek4 = const
     t0 = e2k2 - s2
     ab = dr.sqrt(t0 * t0 + ek4)  # a² + b²
     a = dr.sqrt(dr.maximum(0.5 * (ab + t0), 0.0))
@@ -66,7 +66,8 @@ def exact_at(inc, const):
     rs = (am * am + b2) / dr.maximum(ap * ap + b2, _TINY)
     ac = a * c
     pm, pp = ac - s2, ac + s2
-    rp = rs * (pm * pm + b2 * c2) / dr.maximum(pp * pp + b2 * c2, _TINY)
+    b2c2 = b2 * c2
+    rp = rs * (pm * pm + b2c2) / dr.maximum(pp * pp + b2c2, _TINY)
     return 0.5 * (rs + rp)
 
 

@@ -45,7 +45,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .vector import dot, mitsuba_vector
+from .vector import dot, mitsuba_vector, terms_vector
 
 BECKMANN, GGX = "beckmann", "ggx"
 DISTRIBUTIONS = (BECKMANN, GGX)
@@ -200,7 +200,8 @@ def sample_visible(kind: str, alpha, wi, u, distr=None):
     own exact sampler (Jakob's numerical inversion for Beckmann, Heitz 2018 for GGX), the one
     ``roughconductor`` uses; ``distr`` is :func:`distribution` (kind, α) when it is at hand.
     """
-    return (distr or distribution(kind, alpha)).sample(mitsuba_vector(wi), u)[0]
+    m, _ = (distr or distribution(kind, alpha)).sample(mitsuba_vector(wi), u)
+    return terms_vector(m)
 
 
 def sample_vcavity_visible(kind: str, alpha, wi, u, u_facet):

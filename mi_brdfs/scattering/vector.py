@@ -19,6 +19,12 @@ def mitsuba_vector(v):
     return v
 
 
+def terms_vector(v):
+    """A direction from Mitsuba's own functions for the terms: itself (the terms compiled for
+    Python floats read it once into their own vector type: ``floats.OVERRIDES``)."""
+    return v
+
+
 def dot(a, b):
     """a·b, rounded as ``dr.dot`` rounds it."""
     return dr.fma(a.z, b.z, dr.fma(a.y, b.y, a.x * b.x))
