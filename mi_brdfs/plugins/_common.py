@@ -105,6 +105,13 @@ def variant_tools() -> SimpleNamespace:
         for Python floats in scalar ones (:func:`~mi_brdfs.scattering.floats.specialise_class`)."""
         return cls if jit else floats.specialise_class(cls)
 
+    def configure(obj, values, nones=()):
+        """Compile ``obj``'s eval_pdf and sample for its configuration in scalar variants
+        (:func:`~mi_brdfs.scattering.floats.configure`); nothing in JIT variants, where the
+        trace drops what is switched off."""
+        if not jit:
+            floats.configure(obj, values, nones)
+
     def terms(module):
         """A module of :mod:`mi_brdfs.scattering` as this variant runs it: itself in JIT
         variants, compiled for Python floats in scalar ones (:mod:`~mi_brdfs.scattering.floats`)."""
@@ -199,6 +206,7 @@ def variant_tools() -> SimpleNamespace:
         scale=scale,
         terms=terms,
         specialise_class=specialise_class,
+        configure=configure,
         vector=vector,
         direction=direction,
         to_mitsuba=to_mitsuba,

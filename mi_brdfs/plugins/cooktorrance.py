@@ -134,6 +134,12 @@ DIFFERENTIABLE = mi.ParamFlags.Differentiable
 DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
 fres = V.terms(fresnel)
 FRESNEL_TERMS = {"exact": fresnel.exact, "schlick": fresnel.schlick}  # per spectrum
+#: What scalar variants compile an instance's eval_pdf and sample for (floats.configure): the
+#: switches, and which optional parts are absent (None).
+CONFIGURATION = ("m_distribution", "m_shadowing", "m_fresnel", "m_sample_visible",
+                 "m_transmission", "m_anisotropic")
+OPTIONAL = ("m_diffuse_reflectance", "m_specular_transmittance", "_channels", "_alpha_const",
+            "_distr", "_fresnel_term", "_ks_channels", "_kt_channels")
 #: The material's part of each per-channel term (fresnel.exact_at and schlick_at take it).
 FRESNEL_CONSTANTS = {"exact": fres.exact_constants, "schlick": fres.schlick_constants}
 
@@ -775,6 +781,7 @@ class CookTorrance(mi.BSDF):
                 constants = FRESNEL_CONSTANTS[self.m_fresnel] if fresnel_on else \
                     (lambda e, k: None)
                 self._channels = [(ks, constants(e, k)) for ks, e, k in zip(*channels)]
+        V.configure(self, CONFIGURATION, OPTIONAL)
 
     def to_string(self):
         if self.m_transmission:

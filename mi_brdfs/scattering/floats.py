@@ -59,6 +59,7 @@ import ast
 import inspect
 import itertools
 import sys
+import types
 from types import ModuleType, SimpleNamespace
 
 import math
@@ -726,12 +727,14 @@ def _unbox(fn: ast.FunctionDef, kinds: dict, tools: str | None) -> ast.FunctionD
     uses |= {id(call.args[0]) for call in c.calls
              if kind(call.func) == "out" and len(call.args) == 1 and not call.keywords
              and isinstance(call.args[0], ast.Name)}
-    bare = {name.id for name in c.loads if id(name) not in uses}  # names loaded otherwise
     assigned = c.assigned
     # every store of a chosen name is 'v = <a maker>' or 'v = w' of another chosen name w
     chosen = {name for name, values in assigned.items()
               if len(values) == c.stores.get(name) and name not in c.params | c.nested
               and all(made(v) or isinstance(v, ast.Name) for v in values)}
+    # names loaded otherwise (w in a copy 'v = w' into a candidate v is judged below, with v)
+    copies = {id(v) for name in chosen for v in assigned[name] if isinstance(v, ast.Name)}
+    bare = {name.id for name in c.loads if id(name) not in uses | copies}
     while True:  # a copy of a name that is not chosen is no maker: drop until none is left
         keep = {name for name in chosen if name not in bare and all(
             made(v) or v.id in chosen for v in assigned[name])}
@@ -863,6 +866,9 @@ def specialise_class(cls: type, tools: str = "V", skip=("__init__",)) -> type:
         finish(name)
     methods = [finished[node.name] for node in methods]
     kinds = _kinds({**_helpers(rewrite), **rewrite.injected})
+    # kept for configure(): the methods before the last two passes, which folding may widen
+    cls.__taken__ = (ast.Module([_copy(node) for node in methods], []), kinds, tools, g)
+    cls.__configured__ = {}
     methods = [_scalarise(_unbox(node, kinds, tools)) for node in methods]
     code = compile(ast.fix_missing_locations(ast.Module(methods, [])),
                    f"<{module.__name__}.{cls.__name__} for floats>", "exec",
@@ -883,3 +889,166 @@ def compiled_source(compiled) -> str:
     compiled, as Python text: what runs in scalar variants."""
     tree = compiled._compiled if isinstance(compiled, SimpleNamespace) else compiled.__compiled__
     return ast.unparse(tree)
+
+
+# -------------------------------------------------------------------------------------------------
+# Compiled for one configuration
+# -------------------------------------------------------------------------------------------------
+
+def configure(obj, values: tuple, nones: tuple = (), methods: tuple = ("eval_pdf", "sample")):
+    """
+    Give ``obj`` (an instance of a class compiled by :func:`specialise_class`) its own
+    ``methods``, compiled for its configuration: the attributes ``values`` (strings, bools or
+    None: which distribution, which lobes) and whether each of ``nones`` is None (a constant
+    parameter read once, a lobe that is absent) are put in as constants, and every test they
+    decide is folded away (:func:`_fold`), so that a switch that is off costs nothing, not
+    even its test. The compiled methods are cached per class and configuration and bound to
+    the instance, where Mitsuba's calls find them first; call again whenever the
+    configuration may have changed (``parameters_changed``).
+    """
+    cls = type(obj)
+    config = {f"self.{a}": getattr(obj, a) for a in values}
+    if not all(v is None or type(v) in (str, bool, int) for v in config.values()):
+        return  # (not a configuration: keep the class's methods)
+    known = {f"self.{a}": getattr(obj, a) is None for a in nones}
+    key = (tuple(config.items()), tuple(known.items()), methods)
+    functions = cls.__configured__.get(key)
+    if functions is None:
+        tree, kinds, tools, g = cls.__taken__  # (g: the globals of the class's own module)
+        nodes = [_copy(node) for node in tree.body if node.name in methods]
+        nodes = [_scalarise(_unbox(_fold(node, config, known), kinds, tools)) for node in nodes]
+        code = compile(ast.fix_missing_locations(ast.Module(nodes, [])),
+                       f"<{cls.__module__}.{cls.__name__} for floats, configured>", "exec",
+                       flags=__future__.annotations.compiler_flag, dont_inherit=True)
+        functions = {}
+        exec(code, g, functions)  # noqa: S102 - the package's own source, rewritten above
+        cls.__configured__[key] = functions
+    for name, fn in functions.items():
+        obj.__dict__[name] = types.MethodType(fn, obj)
+
+
+def _dotted(node) -> str | None:
+    """'self.name' for an attribute of a name, else None."""
+    if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name):
+        return f"{node.value.id}.{node.attr}"
+    return None
+
+
+def _truth(node):
+    """(True, value) where ``node`` is a constant, else (False, None)."""
+    if isinstance(node, ast.Constant):
+        return True, node.value
+    return False, None
+
+
+def _fold(fn: ast.FunctionDef, values: dict, nones: dict) -> ast.FunctionDef:
+    """
+    ``fn`` with the attributes of ``values`` ('self.name' -> value) put in, the None tests
+    of ``nones`` ('self.name' -> whether it is None) decided, also through local names
+    assigned from them once, and everything constant folded: comparisons, ``not``, leading
+    constants of ``and``/``or``, conditional expressions and ``if`` statements with constant
+    tests (the branch not taken is dropped), and local names assigned a constant once.
+    """
+    for _ in range(8):
+        c = _Census(fn)
+        looped = {n.id for loop in ast.walk(fn) if isinstance(loop, (ast.For, ast.While))
+                  for n in ast.walk(loop) if isinstance(n, ast.Name)
+                  and not isinstance(n.ctx, ast.Load)}
+        single = {name for name, count in c.stores.items()
+                  if count == 1 and name not in c.params | c.nested | looped
+                  and len(c.assigned.get(name, ())) == 1}
+        constants = {name: c.assigned[name][0].value for name in single
+                     if isinstance(c.assigned[name][0], ast.Constant)}
+        local_nones = {name: nones[_dotted(c.assigned[name][0])] for name in single
+                       if _dotted(c.assigned[name][0]) in nones}
+        folder = _Folder(values, nones, constants, local_nones)
+        fn = folder.visit(fn)
+        if not folder.changed:
+            break
+    return fn
+
+
+class _Folder(ast.NodeTransformer):
+    """One round of :func:`_fold`."""
+
+    def __init__(self, values, nones, constants, local_nones):
+        self.values, self.nones = values, nones
+        self.constants, self.local_nones = constants, local_nones
+        self.changed = False
+
+    def _const(self, value, node):
+        self.changed = True
+        return ast.copy_location(ast.Constant(value), node)
+
+    def visit_Attribute(self, node):
+        name = _dotted(node)
+        if name in self.values and isinstance(node.ctx, ast.Load):
+            return self._const(self.values[name], node)
+        return self.generic_visit(node)
+
+    def visit_Name(self, node):
+        if isinstance(node.ctx, ast.Load) and node.id in self.constants:
+            return self._const(self.constants[node.id], node)
+        return node
+
+    def visit_Compare(self, node):
+        # x is None / x is not None, for an attribute of nones or a local assigned from one
+        if len(node.ops) == 1 and isinstance(node.ops[0], (ast.Is, ast.IsNot)) and \
+                isinstance(node.comparators[0], ast.Constant) and \
+                node.comparators[0].value is None:
+            left = node.left
+            known = None
+            if _dotted(left) in self.nones:
+                known = self.nones[_dotted(left)]
+            elif isinstance(left, ast.Name) and left.id in self.local_nones:
+                known = self.local_nones[left.id]
+            if known is not None:
+                return self._const(known if isinstance(node.ops[0], ast.Is) else not known,
+                                   node)
+        node = self.generic_visit(node)
+        operands = [node.left, *node.comparators]
+        if all(isinstance(o, ast.Constant) for o in operands):
+            ops = {ast.Eq: lambda a, b: a == b, ast.NotEq: lambda a, b: a != b,
+                   ast.Is: lambda a, b: a is b, ast.IsNot: lambda a, b: a is not b}
+            if all(type(op) in ops for op in node.ops):
+                result = all(ops[type(op)](a.value, b.value)
+                             for op, a, b in zip(node.ops, operands, operands[1:]))
+                return self._const(result, node)
+        return node
+
+    def visit_UnaryOp(self, node):
+        node = self.generic_visit(node)
+        if isinstance(node.op, ast.Not) and isinstance(node.operand, ast.Constant):
+            return self._const(not node.operand.value, node)
+        return node
+
+    def visit_BoolOp(self, node):
+        node = self.generic_visit(node)
+        values = list(node.values)
+        stop = isinstance(node.op, ast.Or)  # the truth that ends the evaluation
+        while len(values) > 1 and isinstance(values[0], ast.Constant):
+            if bool(values[0].value) == stop:
+                return self._const(values[0].value, node)
+            values.pop(0)
+            self.changed = True
+        if len(values) == 1:
+            return values[0]
+        node.values = values
+        return node
+
+    def visit_IfExp(self, node):
+        node = self.generic_visit(node)
+        known, value = _truth(node.test)
+        if known:
+            self.changed = True
+            return node.body if value else node.orelse
+        return node
+
+    def visit_If(self, node):
+        node = self.generic_visit(node)
+        known, value = _truth(node.test)
+        if not known:
+            return node
+        self.changed = True
+        kept = node.body if value else node.orelse
+        return kept or ast.copy_location(ast.Pass(), node)

@@ -248,13 +248,17 @@ def _properties(config) -> mi.Properties:
 @contextlib.contextmanager
 def _generic(cls):
     """``cls`` with the methods it had before floats.specialise_class (``__generic_methods__``),
-    while the block runs; the compiled ones are put back however it ends."""
+    and no instance given methods of its own (floats.configure off), while the block runs; the
+    compiled ones are put back however it ends."""
     compiled = {name: vars(cls)[name] for name in cls.__generic_methods__}
+    configure = floats.configure
     try:
+        floats.configure = lambda *args, **kwargs: None
         for name, method in cls.__generic_methods__.items():
             setattr(cls, name, method)
         yield cls
     finally:
+        floats.configure = configure
         for name, method in compiled.items():
             setattr(cls, name, method)
 
@@ -759,3 +763,78 @@ def test20_a_wrong_unboxing_is_caught(variant_scalar_rgb, np_rng, monkeypatch, s
         monkeypatch.setattr(floats, "_unbox", lambda fn, *args: fn)
     with pytest.raises(AssertionError, match="differ"):
         _check_class_equals_generic(_fresh_plugin_class(monkeypatch), np_rng)
+
+
+def test21_instances_compiled_for_their_configuration(variant_scalar_rgb):
+    """A cooktorrance instance gets its own eval_pdf and sample, compiled for its switches
+    (floats.configure), in which no switch is tested any more; instances of the same
+    configuration share them, and a parameter update that keeps the configuration keeps
+    them."""
+    from mi_brdfs.bsdfspec import load_bsdf
+    a = load_bsdf({"type": "cooktorrance", "shadowing": "smith", "material": "Au"})
+    b = load_bsdf({"type": "cooktorrance", "shadowing": "smith", "material": "Al"})
+    for name in ("eval_pdf", "sample"):
+        assert name in vars(a) and vars(a)[name].__func__ is vars(b)[name].__func__
+    cls = type(a)
+    key = next(k for k in cls.__configured__ if ("self.m_shadowing", "smith") in k[0])
+    source = ast.unparse(_configured_tree(cls, key, "eval_pdf"))
+    assert "m_shadowing" in inspect.getsource(sys.modules[cls.__module__])
+    for switch in CONFIGURATION_TESTED:
+        assert switch not in source, (switch, source[:2000])
+    # a new α: the same configuration, the same methods (α is read by parameters_changed)
+    params = mi.traverse(a)
+    before = vars(a)["eval_pdf"].__func__
+    params["alpha.value"] = 0.3
+    params.update()
+    assert vars(a)["eval_pdf"].__func__ is before  # (the same configuration)
+
+
+#: The switches whose tests a configured cooktorrance no longer makes.
+CONFIGURATION_TESTED = ("m_shadowing", "m_distribution", "m_fresnel", "m_sample_visible",
+                        "m_transmission", "_channels is", "_alpha_const is")
+
+
+def _configured_tree(cls, key, name):
+    """The syntax tree floats.configure compiled ``name`` from, for configuration ``key``."""
+    config, known, _ = key
+    tree, kinds, tools, _ = cls.__taken__
+    node = next(n for n in tree.body if n.name == name)
+    return floats._scalarise(floats._unbox(floats._fold(floats._copy(node), dict(config),
+                                                        dict(known)), kinds, tools))
+
+
+def test22_a_wrong_fold_is_caught(variant_scalar_rgb, np_rng, monkeypatch):
+    """test07 rejects instances compiled with every constant 'if' taking the other branch."""
+
+    def wrong(self, node):
+        node = self.generic_visit(node)
+        known, value = floats._truth(node.test)
+        if not known:
+            return node
+        self.changed = True
+        kept = node.orelse if value else node.body
+        return kept or ast.Pass()
+
+    monkeypatch.setattr(floats._Folder, "visit_If", wrong)
+    cls = _fresh_plugin_class(monkeypatch)
+    with pytest.raises((AssertionError, AttributeError, NameError, TypeError)):
+        _check_class_equals_generic(cls, np_rng, configs=CT_CONFIGS[:3])
+
+
+def test23_configured_after_another_variant_loaded(variant_scalar_rgb):
+    """The plugin module is loaded afresh for each variant: an instance made in scalar_rgb after
+    another variant's module was loaded is compiled in scalar_rgb's module (its globals: the
+    scalar variant tools), and evaluates."""
+    from conftest import set_variant
+
+    from mi_brdfs.bsdfspec import load_bsdf
+    spec = {"type": "cooktorrance", "shadowing": "smith", "material": "Au", "alpha": 0.37}
+    set_variant("scalar_spectral")  # (its own module of cooktorrance, now in sys.modules)
+    set_variant("scalar_rgb")
+    bsdf = load_bsdf(spec)
+    si = mi.SurfaceInteraction3f()
+    si.wi = mi.Vector3f(0.3, 0.2, 0.932738)
+    value, pdf = bsdf.eval_pdf(mi.BSDFContext(), si, mi.Vector3f(0.1, 0.4, 0.910465))
+    with _generic(type(bsdf)):
+        want = load_bsdf(spec).eval_pdf(mi.BSDFContext(), si, mi.Vector3f(0.1, 0.4, 0.910465))
+    assert list(value) == list(want[0]) and pdf == want[1] and pdf > 0
