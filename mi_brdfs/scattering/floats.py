@@ -59,6 +59,7 @@ import ast
 import inspect
 import itertools
 import sys
+import threading
 import types
 from types import ModuleType, SimpleNamespace
 
@@ -459,9 +460,10 @@ def _inlinable(fn: ast.FunctionDef):
     return params, expr
 
 
-def _constants(module) -> dict:
-    """The upper-case module-level ints, floats and strings of ``module`` (not bools)."""
-    return {name: value for name, value in vars(module).items()
+def _constants(namespace: dict) -> dict:
+    """The upper-case module-level ints, floats and strings of a module's ``namespace`` (not
+    bools)."""
+    return {name: value for name, value in namespace.items()
             if type(value) in (int, float, str) and name.lstrip("_")[:1].isupper()
             and name.lstrip("_").upper() == name.lstrip("_")}
 
@@ -545,7 +547,7 @@ def specialise(module: ModuleType) -> SimpleNamespace:
                     inline[name] = sibling._inline[value.__name__]
                 if value.__name__ in sibling._bodies:
                     bodies[name] = sibling._bodies[value.__name__]
-    rewrite = _Rewrite(_constants(module), inline, bodies=bodies)
+    rewrite = _Rewrite(_constants(vars(module)), inline, bodies=bodies)
     functions, own, own_bodies = [], {}, {}
     for node in ast.parse(inspect.getsource(module)).body:
         if isinstance(node, ast.FunctionDef):  # in order: a term inlines those before it
@@ -598,6 +600,7 @@ class _Census:
         self.nested: set[str] = set()
         self.loads: list = []  # every Name node read
         self.calls: list = []
+        self.loops: list = []
         for node in ast.walk(fn):
             kind = type(node)
             if kind is ast.Name:
@@ -618,6 +621,8 @@ class _Census:
                     self.assigned.setdefault(node.targets[0].id, []).append(node.value)
             elif kind is ast.Call:
                 self.calls.append(node)
+            elif kind in (ast.For, ast.While):
+                self.loops.append(node)
             elif kind in (ast.FunctionDef, ast.Lambda) and node is not fn:
                 self.nested |= {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
         a = fn.args
@@ -813,7 +818,30 @@ def _kinds(names: dict) -> dict:
     return {name: k for name, value in names.items() for obj, k in known if value is obj}
 
 
+#: Serialises compiling (plugins may be constructed on Mitsuba's scene-loading threads).
+_lock = threading.RLock()
+
+
 def specialise_class(cls: type, tools: str = "V", skip=("__init__",)) -> type:
+    """
+    Mark ``cls`` to be compiled for Python floats (:func:`compiled_class`) when its first
+    instance is configured (:func:`configure`), so that a process that loads a scalar variant
+    but never makes one pays nothing for it; its module's globals are kept for then.
+    """
+    cls.__specialise__ = (vars(sys.modules[cls.__module__]), tools, skip)
+    return cls
+
+
+def compiled_class(cls: type) -> type:
+    """``cls`` compiled by :func:`_compile_class` (once), where :func:`specialise_class` marked
+    it; returned."""
+    with _lock:
+        if "__generic_methods__" not in vars(cls) and "__specialise__" in vars(cls):
+            _compile_class(cls, *cls.__specialise__)
+    return cls
+
+
+def _compile_class(cls: type, g: dict, tools: str, skip) -> type:
     """
     ``cls`` with its methods compiled for Python floats, in place: the rewrites of
     :func:`specialise`, the inlining of the terms of the compiled modules it holds as module
@@ -825,17 +853,17 @@ def specialise_class(cls: type, tools: str = "V", skip=("__init__",)) -> type:
     originals stay in ``cls.__generic_methods__`` (for tests); :func:`compiled_source` gives
     the compiled source. For scalar variants only: the rewrites assume the
     values of ``dr.maximum``, ``dr.minimum`` and ``dr.select`` in the methods are numbers.
+    ``g`` is the globals of the class's module (its own: the module is loaded afresh for
+    each variant, and ``sys.modules`` holds the last one).
     """
-    module = sys.modules[cls.__module__]
-    g = vars(module)
     terms = {alias: value for alias, value in g.items()
              if type(value) is SimpleNamespace and hasattr(value, "_inline")}
     inline = {(alias, name): target for alias, value in terms.items()
               for name, target in value._inline.items()}
     bodies = {(alias, name): entry for alias, value in terms.items()
               for name, entry in value._bodies.items()}
-    rewrite = _Rewrite(_constants(module), inline, tools, bodies)
-    tree = next(node for node in ast.parse(inspect.getsource(module)).body
+    rewrite = _Rewrite(_constants(g), inline, tools, bodies)
+    tree = next(node for node in ast.parse(inspect.getsource(cls)).body
                 if isinstance(node, ast.ClassDef) and node.name == cls.__name__)
     methods = [node for node in tree.body if isinstance(node, ast.FunctionDef)
                and node.name not in skip and not any(
@@ -871,7 +899,7 @@ def specialise_class(cls: type, tools: str = "V", skip=("__init__",)) -> type:
     cls.__configured__ = {}
     methods = [_scalarise(_unbox(node, kinds, tools)) for node in methods]
     code = compile(ast.fix_missing_locations(ast.Module(methods, [])),
-                   f"<{module.__name__}.{cls.__name__} for floats>", "exec",
+                   f"<{cls.__module__}.{cls.__name__} for floats>", "exec",
                    flags=__future__.annotations.compiler_flag, dont_inherit=True)
     for name, value in {**_helpers(rewrite), **rewrite.injected}.items():
         g.setdefault(name, value)
@@ -906,25 +934,30 @@ def configure(obj, values: tuple, nones: tuple = (), methods: tuple = ("eval_pdf
     the instance, where Mitsuba's calls find them first; call again whenever the
     configuration may have changed (``parameters_changed``).
     """
-    cls = type(obj)
+    cls = compiled_class(type(obj))
     config = {f"self.{a}": getattr(obj, a) for a in values}
     if not all(v is None or type(v) in (str, bool, int) for v in config.values()):
         return  # (not a configuration: keep the class's methods)
     known = {f"self.{a}": getattr(obj, a) is None for a in nones}
     key = (tuple(config.items()), tuple(known.items()), methods)
-    functions = cls.__configured__.get(key)
-    if functions is None:
-        tree, kinds, tools, g = cls.__taken__  # (g: the globals of the class's own module)
-        nodes = [_copy(node) for node in tree.body if node.name in methods]
-        nodes = [_scalarise(_unbox(_fold(node, config, known), kinds, tools)) for node in nodes]
-        code = compile(ast.fix_missing_locations(ast.Module(nodes, [])),
-                       f"<{cls.__module__}.{cls.__name__} for floats, configured>", "exec",
-                       flags=__future__.annotations.compiler_flag, dont_inherit=True)
-        functions = {}
-        exec(code, g, functions)  # noqa: S102 - the package's own source, rewritten above
+    with _lock:
+        functions = cls.__configured__.get(key) or _configured(cls, config, known, methods)
         cls.__configured__[key] = functions
     for name, fn in functions.items():
         obj.__dict__[name] = types.MethodType(fn, obj)
+
+
+def _configured(cls, config: dict, known: dict, methods) -> dict:
+    """:func:`configure`'s functions for one configuration, compiled."""
+    tree, kinds, tools, g = cls.__taken__  # (g: the globals of the class's own module)
+    nodes = [_copy(node) for node in tree.body if node.name in methods]
+    nodes = [_scalarise(_unbox(_fold(node, config, known), kinds, tools)) for node in nodes]
+    code = compile(ast.fix_missing_locations(ast.Module(nodes, [])),
+                   f"<{cls.__module__}.{cls.__name__} for floats, configured>", "exec",
+                   flags=__future__.annotations.compiler_flag, dont_inherit=True)
+    functions: dict = {}
+    exec(code, g, functions)  # noqa: S102 - the package's own source, rewritten above
+    return functions
 
 
 def _dotted(node) -> str | None:
@@ -949,22 +982,27 @@ def _fold(fn: ast.FunctionDef, values: dict, nones: dict) -> ast.FunctionDef:
     constants of ``and``/``or``, conditional expressions and ``if`` statements with constant
     tests (the branch not taken is dropped), and local names assigned a constant once.
     """
-    for _ in range(8):
+    constants: dict = {}
+    local_nones: dict = {}
+    for _ in range(6):
+        folder = _Folder(values, nones, constants, local_nones)
+        fn = folder.visit(fn)
+        # the locals assigned once (outside loops) a constant, or an attribute of nones, in
+        # what is left: put in by the next round
         c = _Census(fn)
-        looped = {n.id for loop in ast.walk(fn) if isinstance(loop, (ast.For, ast.While))
-                  for n in ast.walk(loop) if isinstance(n, ast.Name)
-                  and not isinstance(n.ctx, ast.Load)}
+        looped = {n.id for loop in c.loops for n in ast.walk(loop)
+                  if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Load)}
         single = {name for name, count in c.stores.items()
                   if count == 1 and name not in c.params | c.nested | looped
                   and len(c.assigned.get(name, ())) == 1}
-        constants = {name: c.assigned[name][0].value for name in single
-                     if isinstance(c.assigned[name][0], ast.Constant)}
-        local_nones = {name: nones[_dotted(c.assigned[name][0])] for name in single
+        found = {name: c.assigned[name][0].value for name in single
+                 if isinstance(c.assigned[name][0], ast.Constant)}
+        found_nones = {name: nones[_dotted(c.assigned[name][0])] for name in single
                        if _dotted(c.assigned[name][0]) in nones}
-        folder = _Folder(values, nones, constants, local_nones)
-        fn = folder.visit(fn)
-        if not folder.changed:
+        if not folder.changed and found.keys() <= constants.keys() and \
+                found_nones.keys() <= local_nones.keys():
             break
+        constants, local_nones = found, found_nones
     return fn
 
 

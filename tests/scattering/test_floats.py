@@ -357,7 +357,7 @@ def test07_compiled_class_equals_the_generic_class(variant_scalar_rgb, np_rng):
     change a last bit; the methods have none (3000 random pairs × the 12 configurations, every
     context: 0 bits differ). Should one be added, compare with rtol = 2⁻²³ (float32's last
     bit)."""
-    cls = registry.plugin_class("cooktorrance")
+    cls = floats.compiled_class(registry.plugin_class("cooktorrance"))
     compiled_file = f"<{cls.__module__}.{cls.__name__} for floats>"
     assert {"eval_pdf", "sample", "parameters_changed"} <= set(cls.__generic_methods__)
     assert cls.sample.__code__.co_filename == compiled_file
@@ -380,7 +380,7 @@ def _fresh_plugin_class(monkeypatch, module="mi_brdfs.plugins.cooktorrance",
     fresh = importlib.util.module_from_spec(spec)
     monkeypatch.setitem(sys.modules, module, fresh)
     spec.loader.exec_module(fresh)
-    return getattr(fresh, name)
+    return floats.compiled_class(getattr(fresh, name))
 
 
 def test08_a_wrong_class_rewrite_is_caught(variant_scalar_rgb, np_rng, monkeypatch):
@@ -445,7 +445,7 @@ def test09_terms_are_inlined(variant_scalar_rgb):
     compiled cooktorrance calls neither the terms mf.ndf, mf.smith_g1_mitsuba, vec.half_vector
     (their expressions or bodies are in place) nor V.select, V.choose (conditionals)."""
     _check_vector_inlined(floats.specialise(vector))
-    _check_class_inlined(registry.plugin_class("cooktorrance"))
+    _check_class_inlined(floats.compiled_class(registry.plugin_class("cooktorrance")))
 
 
 @pytest.mark.parametrize("rewrite", ["_inlined", "_body_of", "_tools_call"])
@@ -721,7 +721,7 @@ def test19_directions_kept_as_floats(variant_scalar_rgb):
     local floats (floats._unbox): it makes no Vec3 of them and reads no component of an object
     for them; where a direction is also handed on whole (ωi), its components are read once
     into locals (floats._scalarise)."""
-    cls = registry.plugin_class("cooktorrance")
+    cls = floats.compiled_class(registry.plugin_class("cooktorrance"))
     tree = ast.parse(_functions(floats.compiled_source(cls))["eval_pdf"])
     components, objects = set(), set()
     for node in ast.walk(tree):
