@@ -923,28 +923,68 @@ def compiled_source(compiled) -> str:
 # Compiled for one configuration
 # -------------------------------------------------------------------------------------------------
 
+#: Calls of an instance's configured methods (all together) after which :func:`configure`
+#: compiles them (and the class, the first time): compiling takes 0.1-0.6 s, which a few
+#: thousand calls of the methods as written cost less than, and a render makes millions.
+PROMOTE_AFTER = 20_000
+
+
 def configure(obj, values: tuple, nones: tuple = (), methods: tuple = ("eval_pdf", "sample")):
     """
-    Give ``obj`` (an instance of a class compiled by :func:`specialise_class`) its own
+    Give ``obj`` (an instance of a class marked by :func:`specialise_class`) its own
     ``methods``, compiled for its configuration: the attributes ``values`` (strings, bools or
     None: which distribution, which lobes) and whether each of ``nones`` is None (a constant
     parameter read once, a lobe that is absent) are put in as constants, and every test they
     decide is folded away (:func:`_fold`), so that a switch that is off costs nothing, not
     even its test. The compiled methods are cached per class and configuration and bound to
-    the instance, where Mitsuba's calls find them first; call again whenever the
-    configuration may have changed (``parameters_changed``).
+    the instance, where Mitsuba's calls find them first. A configuration not compiled yet is
+    compiled after :data:`PROMOTE_AFTER` calls (the class's methods serve until then). Call
+    again whenever the configuration may have changed (``parameters_changed``).
     """
-    cls = compiled_class(type(obj))
+    cls = type(obj)
     config = {f"self.{a}": getattr(obj, a) for a in values}
     if not all(v is None or type(v) in (str, bool, int) for v in config.values()):
         return  # (not a configuration: keep the class's methods)
     known = {f"self.{a}": getattr(obj, a) is None for a in nones}
     key = (tuple(config.items()), tuple(known.items()), methods)
+    functions = vars(cls).get("__configured__", {}).get(key)
+    if functions is None and PROMOTE_AFTER > 0:
+        _count_calls(obj, methods, lambda: _promote(obj, key, config, known, methods))
+        return
+    if functions is None:
+        functions = _promote(obj, key, config, known, methods)
+    for name, fn in functions.items():
+        obj.__dict__[name] = types.MethodType(fn, obj)
+
+
+def _promote(obj, key, config: dict, known: dict, methods) -> dict:
+    """Compile ``obj``'s class (once) and its configuration (once), bind them to ``obj``."""
     with _lock:
+        cls = compiled_class(type(obj))
         functions = cls.__configured__.get(key) or _configured(cls, config, known, methods)
         cls.__configured__[key] = functions
     for name, fn in functions.items():
         obj.__dict__[name] = types.MethodType(fn, obj)
+    return functions
+
+
+def _count_calls(obj, methods, promote) -> None:
+    """Bind to ``obj`` stand-ins of ``methods`` that call the class's methods and, at the
+    :data:`PROMOTE_AFTER`-th call of any, ``promote()`` (which binds the compiled ones)."""
+    left = [PROMOTE_AFTER]
+    cls = type(obj)
+
+    def counted(name):
+        def method(*args, **kwargs):
+            left[0] -= 1
+            if left[0] == 0:
+                promote()
+            return getattr(cls, name)(obj, *args, **kwargs)
+        method.__name__ = name
+        return method
+
+    for name in methods:
+        obj.__dict__[name] = counted(name)
 
 
 def _configured(cls, config: dict, known: dict, methods) -> dict:

@@ -19,6 +19,13 @@ from helpers import random_directions
 from mi_brdfs import registry
 from mi_brdfs.scattering import floats, fresnel, microfacet, orennayar, vector, ward
 
+
+@pytest.fixture(autouse=True)
+def _configure_at_once(monkeypatch):
+    """Instances get their configured methods when made (not after PROMOTE_AFTER calls), so
+    that the tests here check the compiled code."""
+    monkeypatch.setattr(floats, "PROMOTE_AFTER", 0)
+
 REWRITTEN = ("select", "maximum", "minimum", "fma", "square", *floats.MATH)
 #: Terms that build a direction and compute on with it: the original rounds it to float32 (an
 #: mi.Vector3f), the compiled term keeps a floats.Vec3 of float64, so they agree to float32's
@@ -838,3 +845,46 @@ def test23_configured_after_another_variant_loaded(variant_scalar_rgb):
     with _generic(type(bsdf)):
         want = load_bsdf(spec).eval_pdf(mi.BSDFContext(), si, mi.Vector3f(0.1, 0.4, 0.910465))
     assert list(value) == list(want[0]) and pdf == want[1] and pdf > 0
+
+
+def test24_promoted_after_calls_and_renders_the_same(variant_scalar_rgb, monkeypatch):
+    """With PROMOTE_AFTER = 50, an instance first runs the class's methods through counting
+    stand-ins, then its configured methods; a scalar render of the brushed and the glass scene
+    through Mitsuba (which finds the instance's methods) is the same image, bit for bit, as
+    with the generic methods throughout."""
+    from mi_brdfs.bsdfspec import load_bsdf
+    from mi_brdfs.scenes import load_scene
+    monkeypatch.setattr(floats, "PROMOTE_AFTER", 50)
+    cls = floats.compiled_class(registry.plugin_class("cooktorrance"))
+    monkeypatch.setattr(cls, "__configured__", {})  # (no configuration compiled yet)
+    bsdf = load_bsdf({"type": "cooktorrance", "shadowing": "smith", "material": "Cr"})
+    si, ctx = mi.SurfaceInteraction3f(), mi.BSDFContext()
+    si.wi = mi.Vector3f(0.3, 0.2, 0.932738)
+    assert vars(bsdf)["eval_pdf"].__name__ == "eval_pdf"  # (a stand-in)
+    assert not hasattr(vars(bsdf)["eval_pdf"], "__func__")
+    for _ in range(50):
+        bsdf.eval_pdf(ctx, si, mi.Vector3f(0.1, 0.4, 0.910465))
+    assert "configured" in vars(bsdf)["eval_pdf"].__func__.__code__.co_filename
+    import drjit as dr
+    threads = dr.thread_count()
+    dr.set_thread_count(1)  # (two render threads add overlapping blocks in either order)
+    try:
+        _render_both(floats, registry, load_scene)
+    finally:
+        dr.set_thread_count(threads)
+
+
+def _render_both(floats, registry, load_scene):
+    """test24's renders: configured and generic, the same image."""
+    for scene, defines in (("brushed", {"metal": "cooktorrance-smith"}),
+                           ("glass", {"glass": "cooktorrance"})):
+        images = []
+        for generic in (False, True):
+            with contextlib.ExitStack() as stack:
+                if generic:
+                    stack.enter_context(_generic(floats.compiled_class(
+                        registry.plugin_class("cooktorrance"))))
+                loaded = load_scene(scene, dict(defines, res="12", max_depth="4"))
+                images.append(np.array(mi.render(loaded, spp=4, seed=3)))
+        assert np.isfinite(images[0]).all() and images[0].max() > 0
+        np.testing.assert_array_equal(images[0], images[1], err_msg=scene)
