@@ -42,6 +42,10 @@ SCALAR_PASS_S = 0.5
 #: time from the pool's creation to one helper's first answer on a small machine.
 WORKER_START_S = 0.5
 
+#: Seconds helpers kept from an earlier render need to load another scene before their first
+#: answer (an estimate, as WORKER_START_S): the showcase loads in about 0.1 s.
+WORKER_LOAD_S = 0.25
+
 
 def pass_seed(seed: int, index: int) -> int:
     """
@@ -291,8 +295,9 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
                                  record, first)
             return f"{workers} processes × 1 thread"
 
-        if spread and _helpers_ready(workers - 1, variant):
-            # helpers kept from the last render: they start at once, the first pass beside them
+        warm = spread and _helpers_ready(workers - 1, variant)
+        if warm and _helpers_scene == _scene_key(path, defines):
+            # helpers kept from a render of this scene: they start on the first pass at once
             arrangement = spread_over(workers, first_pass)
         else:
             seconds_per_spp = first_pass()
@@ -305,7 +310,8 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
             # never from a helper process itself (``spread``): a script without an ``if
             # __name__ == "__main__"`` guard runs again in each spawned helper, which would
             # spawn its own helpers without end
-            if spread and WORKER_START_S + remaining_s / workers < 0.9 * remaining_s:
+            start_s = WORKER_LOAD_S if warm else WORKER_START_S
+            if spread and start_s + remaining_s / workers < 0.9 * remaining_s:
                 arrangement = spread_over(workers)
         while (item := schedule.next()) is not None:
             run_pass(*item)
@@ -404,6 +410,8 @@ def _worker_render(key: tuple, path: str, defines: dict, seed: int, spp: int):
 
 #: The helper processes kept for the next render: ((variant, count), Pool), or None.
 _helpers = None
+#: The scene (:func:`_scene_key`) the kept helpers were last handed.
+_helpers_scene = None
 
 
 def _helpers_ready(count: int, variant: str) -> bool:
@@ -426,7 +434,8 @@ def _helper_pool(count: int, variant: str):
 def close_helpers() -> None:
     """End the helper processes that scalar renders keep for the next render (if any);
     the interpreter's exit ends them too."""
-    global _helpers
+    global _helpers, _helpers_scene
+    _helpers_scene = None
     if _helpers is not None:
         pool, _helpers = _helpers[1], None
         pool.terminate()
@@ -464,7 +473,8 @@ def _render_with_helpers(helpers, variant, path, defines, seed, schedule, run_pa
     state = threading.Condition()
     pending, failures = [0], []
     pool = _helper_pool(helpers, variant)
-    key = _scene_key(path, defines)
+    global _helpers_scene
+    key = _helpers_scene = _scene_key(path, defines)
 
     def submit() -> None:
         with state:  # not after the pool is closed (failures then holds a None)

@@ -131,12 +131,13 @@ def test11_guided_passes_shrink_at_the_end():
 
 def test12_helpers_kept_for_the_next_render(variant_scalar_rgb, monkeypatch, tmp_path):
     """
-    The helper processes stay for the next render of the variant, which hands them a pass at
-    once (before this process's first); they load a scene again when its file was edited, and
-    close_helpers ends them.
+    The helper processes stay for the next render of the variant; they load a scene again
+    when its file was edited (a render of another scene times its first pass here first, then
+    spreads where loading it there pays), and close_helpers ends them.
     """
     import mi_brdfs.render as R
     monkeypatch.setattr(R, "WORKER_START_S", 0.0)
+    monkeypatch.setattr(R, "WORKER_LOAD_S", 0.0)
     from mi_brdfs.scenes import scene_path
     scene, text = tmp_path / "box.xml", scene_path("cbox").read_text()
     scene.write_text(text)
@@ -155,3 +156,28 @@ def test12_helpers_kept_for_the_next_render(variant_scalar_rgb, monkeypatch, tmp
     processes = list(pool._pool)
     R.close_helpers()
     assert R._helpers is None and not any(p.is_alive() for p in processes)
+
+
+def test13_kept_helpers_start_at_once_on_the_same_scene(variant_scalar_rgb, monkeypatch):
+    """A render of the scene the kept helpers rendered last hands them its first pass at once
+    (two passes run side by side from the start); a render of another scene first times a
+    pass here."""
+    import mi_brdfs.render as R
+    monkeypatch.setattr(R, "WORKER_START_S", 0.0)
+    monkeypatch.setattr(R, "WORKER_LOAD_S", 0.0)
+    defines = {"res": "8", "material": "lambert", "max_depth": "3"}
+    R.close_helpers()
+    render("cbox", spp=4, pass_spp=1, defines=defines, processes=2, progress=False)
+    handed = []
+    original = R._render_with_helpers
+
+    def spy(*args):
+        handed.append(args[-1] is not None)  # (a first pass to run beside the helpers)
+        return original(*args)
+
+    monkeypatch.setattr(R, "_render_with_helpers", spy)
+    render("cbox", spp=4, pass_spp=1, defines=defines, processes=2, progress=False)
+    render("cbox", spp=4, pass_spp=1, defines=dict(defines, max_depth="4"), processes=2,
+           progress=False)
+    assert handed == [True, False]
+    R.close_helpers()
