@@ -14,6 +14,7 @@ import numpy as np
 
 from ..campaign.core import Context, Row, Section, md_table
 from ..render import render
+from ..scattering import floats
 from ..scenes import load_scene
 from .timing import interleaved, median, median_ratio, timed
 
@@ -198,6 +199,8 @@ def scalar_calls(ctx: Context) -> list:
         calls = {}
         for label, spec in CALLS:
             b = load_bsdf(spec)
+            for _ in range(floats.PROMOTE_AFTER):  # (compiled for its configuration, as in
+                b.eval_pdf(c, si, wo)             # a render)
             calls[(label, "eval_pdf")] = lambda b=b: [b.eval_pdf(c, si, wo) for _ in range(n)]
             calls[(label, "sample")] = lambda b=b: [b.sample(c, si, 0.4, u) for _ in range(n)]
         times = interleaved(calls, repeats=ctx.n(5, 2))
@@ -281,14 +284,14 @@ def section(ctx: Context) -> Section:
         "The least a Python plugin costs in a scalar variant: the same Cornell box, in-process "
         "on one render thread, with a Python BSDF that computes nothing and hands every call "
         "to a built-in `diffuse` (the same image as `diffuse`), medians of interleaved repeats. "
-        "The package's render path adds the start of its helper processes to this:", "",
+        "The package's render path adds the start of its helper processes to this (once in "
+        "a session: they are kept for the next render):", "",
         md_table(["BSDF", "time", "ratio to `diffuse`"], floor), "",
         "What the scalar ratios are made of: Mitsuba calls `eval_pdf` (towards the sampled "
         "light) and `sample` once each per path vertex. Time per call from Python (the table "
         f"above prices the call from C++), {ctx.scalar_variant}, medians of interleaved "
-        "repeats; the last row is the least cooktorrance has to compute per call: D, the two "
-        "G1, the pdf and the exact Fresnel of three channels on Python floats, nothing read "
-        "from or written to Mitsuba objects:", "",
+        "repeats after a warm-up that has cooktorrance compiled for its configuration, as in "
+        "a render:", "",
         md_table(["BSDF", "call", "time per call"], calls), "",
         "Trace overhead per BSDF instance (JIT): K spheres, each with its own material "
         "instance (a different parameter value). Every Python instance is traced into the "

@@ -1,5 +1,6 @@
 """
-The terms of this package compiled for Python floats, for scalar variants.
+The terms of this package, and the methods of its plugins, compiled for Python floats, for
+scalar variants.
 
 The terms are written once, with drjit's elementwise functions, and serve every variant. In JIT
 variants they are traced into the render kernel. In scalar variants Mitsuba calls a plugin once
@@ -41,15 +42,29 @@ they are defined in scalar variants:
 ``V.depolarize(x)``             ``x`` (not in polarized variants)
 ==============================  ==========================================================
 
+Beyond expressions, the body of a term (or of a plugin's own method) with a single exit, one
+``return`` at its end, is taken in where it is called as a statement of its own, ``x = f(...)``
+or ``return f(...)``: its parameters bound to the arguments (an argument that cannot change
+before the body reads it is put in directly), its names renamed apart, the globals of another
+module's term bound under names of their own (:meth:`_Rewrite._body_of`). A direction that a
+function only reads by component, or hands to Mitsuba, is then kept as three local floats
+(:func:`_unbox`); one also handed on whole has its components read into locals once
+(:func:`_scalarise`). :func:`configure` compiles an instance's ``eval_pdf`` and ``sample`` once
+more, for its configuration: its switches, and which optional parts are None, put in as
+constants and every test they decide folded away (:func:`_fold`), after :data:`PROMOTE_AFTER`
+calls.
+
 A term that hands a direction to Mitsuba's own functions passes it through
-``vector.mitsuba_vector``, which the compiled terms replace by :func:`to_mitsuba`; a plugin
-converts its directions with :func:`to_mitsuba` where they leave the terms (``bs.wo``).
+``vector.mitsuba_vector``, which the compiled terms replace by :func:`to_mitsuba`, and reads
+one back through ``vector.terms_vector`` (:func:`read_vector`); a plugin converts its
+directions with :func:`to_mitsuba` where they leave the terms (``bs.wo``).
 
 Every other name, call and operation is kept, in the same order. The compiled functions call
 each other, and the compiled versions of the functions their module imports from other modules
 of :mod:`mi_brdfs.scattering` (``microfacet`` uses ``vector.dot``), so a term that calls another
-runs specialised throughout. ``tests/scattering/test_floats.py`` checks that every
-compiled function returns what the original returns on the same floats.
+runs specialised throughout. ``tests/scattering/test_floats.py`` checks that every compiled
+function returns what the original returns on the same floats, and that the compiled and
+configured plugin class returns bit for bit what its generic methods return.
 """
 
 from __future__ import annotations
