@@ -600,6 +600,14 @@ def specialise(module: ModuleType) -> SimpleNamespace:
 _COMPONENTS = ("x", "y", "z")
 
 
+def _component_local(node: ast.Attribute, names) -> ast.Name | None:
+    """The read ``v.x`` (``.y``, ``.z``) of a name ``v`` in ``names`` as the local ``v__x``."""
+    if (isinstance(node.value, ast.Name) and node.value.id in names
+            and node.attr in _COMPONENTS and isinstance(node.ctx, ast.Load)):
+        return ast.copy_location(ast.Name(f"{node.value.id}__{node.attr}", ast.Load()), node)
+    return None
+
+
 class _Census:
     """What :func:`_unbox` and :func:`_scalarise` need to know of a function, in one walk:
     how often each name is stored, the values of its plain assignments, the names read as
@@ -702,11 +710,7 @@ def _scalarise(fn: ast.FunctionDef) -> ast.FunctionDef:
 
     class Reads(ast.NodeTransformer):
         def visit_Attribute(self, node):
-            if (isinstance(node.value, ast.Name) and node.value.id in done
-                    and node.attr in _COMPONENTS and isinstance(node.ctx, ast.Load)):
-                return ast.copy_location(ast.Name(f"{node.value.id}__{node.attr}", ast.Load()),
-                                         node)
-            return self.generic_visit(node)
+            return _component_local(node, done) or self.generic_visit(node)
 
     done: set[str] = set()
     fn.body = Insert()._block(fn.body)
@@ -807,11 +811,7 @@ def _unbox(fn: ast.FunctionDef, kinds: dict, tools: str | None) -> ast.FunctionD
             return self.generic_visit(node)
 
         def visit_Attribute(self, node):
-            if (isinstance(node.value, ast.Name) and node.value.id in chosen
-                    and node.attr in _COMPONENTS and isinstance(node.ctx, ast.Load)):
-                return ast.copy_location(ast.Name(f"{node.value.id}__{node.attr}", ast.Load()),
-                                         node)
-            return self.generic_visit(node)
+            return _component_local(node, chosen) or self.generic_visit(node)
 
     return Unbox().visit(fn)
 
