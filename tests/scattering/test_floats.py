@@ -317,6 +317,8 @@ def _observe(bsdf, contexts, cases):
         for si, wo, sample1, sample2 in cases:
             value, pdf = bsdf.eval_pdf(ctx, si, wo)
             bs, weight = bsdf.sample(ctx, si, sample1, sample2)
+            # (spectra of any length; Mueller matrices in polarized variants: every entry)
+            value, weight = np.ravel(np.array(value)), np.ravel(np.array(weight))
             rows.append([*value, pdf, *bs.wo, bs.pdf, bs.eta, bs.sampled_component,
                          bs.sampled_type, *weight])
             types.append((type(value), type(pdf), type(weight)))
@@ -376,6 +378,20 @@ def test07_compiled_class_equals_the_generic_class(variant_scalar_rgb, np_rng):
         1 / 0
     assert cls.sample.__code__.co_filename == compiled_file  # (restored after an error too)
     _check_class_equals_generic(cls, np_rng)
+
+
+@pytest.mark.parametrize("variant", ["scalar_spectral", "scalar_spectral_polarized"])
+def test07b_compiled_class_equals_the_generic_class_in_other_variants(np_rng, variant):
+    """As test07, in the spectral and the polarized scalar variant (spectra evaluated at each
+    call's wavelengths, no per-channel constants; Mueller matrices), for five
+    configurations."""
+    from conftest import set_variant
+    set_variant(variant)
+    try:
+        cls = floats.compiled_class(registry.plugin_class("cooktorrance"))
+        _check_class_equals_generic(cls, np_rng, configs=[*CT_CONFIGS[:4], CT_CONFIGS[8]])
+    finally:
+        set_variant("scalar_rgb")
 
 
 def _fresh_plugin_class(monkeypatch, module="mi_brdfs.plugins.cooktorrance",
