@@ -61,7 +61,8 @@ def equality(ctx: Context, s: Section) -> str:
         for visible in (True, False):
             for label, ior in (METALS if not ctx.quick else METALS[::3]):
                 common = dict(ior, alpha=0.25, distribution=kind, sample_visible=visible)
-                # eval and pdf to 1e-5 (bit-level agreement up to rounding); sample() is measured, not judged: with D·cos
+                # eval and pdf to 1e-5 (bit-level agreement up to rounding); sample() is
+                # measured, not judged: with D·cos
                 # sampling roughconductor weighs a sample with the sampled normal where its own
                 # eval()/pdf() recompute the half vector (1e-3 apart at cosθ < 0.01)
                 r = checks.check_equal(ct(shadowing="smith", **common),

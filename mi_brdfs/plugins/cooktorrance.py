@@ -141,7 +141,7 @@ CONFIGURATION = ("m_distribution", "m_shadowing", "m_fresnel", "m_sample_visible
 OPTIONAL = ("m_diffuse_reflectance", "m_specular_transmittance", "_channels", "_alpha_const",
             "_distr", "_fresnel_term", "_ks_channels", "_kt_channels")
 #: The material's part of each per-channel term (fresnel.exact_at and schlick_at take it).
-FRESNEL_CONSTANTS = {"exact": fres.exact_constants, "schlick": fres.schlick_constants}
+FRESNEL_CONSTANTS = {"exact": fres.exact_constants, "schlick": fres.r0}
 
 
 class CookTorrance(mi.BSDF):
@@ -293,9 +293,9 @@ class CookTorrance(mi.BSDF):
     float32 collapse of the textbook formula (see
     :func:`mi_brdfs.scattering.microfacet.sample_ndf`), but below α ≈ 10⁻³ the lobe is
     narrower than a χ² histogram resolves: there the plugin behaves as a smooth mirror whose
-    albedo tends to F (measured in the tests). Single scattering loses energy at high α and grazing angles (F = 1, V-cavity,
-    α = 0.5: E = 0.89 at normal incidence); the diffuse base is added, not coupled, so
-    ρd + E_spec ≤ 1 is up to the user.
+    albedo tends to F (measured in the tests). Single scattering loses energy at high α and
+    grazing angles (F = 1, V-cavity, α = 0.5: E = 0.89 at normal incidence); the diffuse base
+    is added, not coupled, so ρd + E_spec ≤ 1 is up to the user.
 
     .. tabs::
         .. code-tab:: xml
@@ -475,11 +475,10 @@ class CookTorrance(mi.BSDF):
         # ωi + ωo vanish (grazing, nearly opposite directions).
         active = active & (cos_im > 0) & (cos_om > 0)
         if V.none(active):
-            return_value, return_pdf = Spectrum(0.0), Float(0.0)
+            value, pdf = Spectrum(0.0), Float(0.0)
         else:
-            return_value, return_pdf = self._microfacet_terms(si, wi, wo, m, cos_im, cos_om,
-                                                              active, weight)
-        return return_value, return_pdf
+            value, pdf = self._microfacet_terms(si, wi, wo, m, cos_im, cos_om, active, weight)
+        return value, pdf
 
     def _microfacet_terms(self, si, wi, wo, m, cos_im, cos_om, active, weight):
         """:meth:`_microfacet` where ωi and ωo see the facet m (cosines ``cos_im``, ``cos_om``)."""
@@ -580,11 +579,11 @@ class CookTorrance(mi.BSDF):
         # each direction sees the front of the facet from its own side of the surface
         active = active & (cos_i != 0.0) & (cos_im * cos_i > 0.0) & (cos_om * cos_o > 0.0)
         if V.none(active):
-            return_value, return_pdf = Spectrum(0.0), Float(0.0)
+            value, pdf = Spectrum(0.0), Float(0.0)
         else:
-            return_value, return_pdf = self._dielectric_terms(
-                si, wi, wo, m, cos_im, cos_om, reflect, eta, active, lobes, radiance, weight)
-        return return_value, return_pdf
+            value, pdf = self._dielectric_terms(si, wi, wo, m, cos_im, cos_om, reflect, eta,
+                                                active, lobes, radiance, weight)
+        return value, pdf
 
     def _dielectric_terms(self, si, wi, wo, m, cos_im, cos_om, reflect, eta, active, lobes,
                           radiance, weight):

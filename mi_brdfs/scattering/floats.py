@@ -136,7 +136,6 @@ class _Rewrite(ast.NodeTransformer):
         self.bodies = {} if bodies is None else bodies
         #: the globals the compiled code needs for the bodies it took in: name -> value
         self.injected: dict = {}
-        self.taken = 0  # bodies taken in so far
         self._bound: list = []  # the names each enclosing function binds (_Lazy)
 
     def visit_FunctionDef(self, node):
@@ -236,10 +235,9 @@ class _Rewrite(ast.NodeTransformer):
         nodes = [n for stmt in body for n in ast.walk(stmt)]
         stored = {n.id for n in nodes
                   if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Load)}
-        if home is None:  # this module's globals: a name the caller binds would hide one
-            free = {n.id for n in nodes if isinstance(n, ast.Name)} - stored - set(params)
-            if any(name in bound for name in free for bound in self._bound):
-                return None
+        globals_read = {n.id for n in nodes if isinstance(n, ast.Name)} - stored - set(params)
+        if home is None and any(name in bound for name in globals_read for bound in self._bound):
+            return None  # (this module's globals: a name the caller binds would hide one)
         tag = next(_unique)
         rename = {n: f"_i{tag}_{n}" for n in stored | set(params)}
         # an argument is put in directly where its value cannot change before the body reads
@@ -251,23 +249,22 @@ class _Rewrite(ast.NodeTransformer):
                and (not changes or not isinstance(a, ast.Attribute))}
         statements = [ast.Assign([ast.Name(rename[p], ast.Store())], a)
                       for p, a in zip(params, args) if p not in put]
-        free = {}
+        aliases = {}
         if home is not None:  # another module's term: its globals, bound here
-            loads = {n.id for stmt in body for n in ast.walk(stmt) if isinstance(n, ast.Name)}
-            for name in sorted(loads - set(rename)):
+            for name in sorted(globals_read):
                 if name in home:
-                    free[name] = f"_g{next(_unique)}"
-                    self.injected[free[name]] = home[name]
-        out = _Substitute(put, {**rename, **free})
+                    aliases[name] = f"_g{next(_unique)}"
+                    self.injected[aliases[name]] = home[name]
+        out = _Substitute(put, {**rename, **aliases})
         statements += [out.visit(_copy(stmt)) for stmt in body[:-1]]
         result = out.visit(_copy(body[-1].value))
         for stmt in statements:
             ast.copy_location(stmt, call)
-        self.taken += 1
         return statements, result
 
     def _tools_call(self, node):
-        """A call of the variant tools (:data:`TOOLS`) rewritten, or None."""
+        """A call of the variant tools rewritten (the module docstring's second table), or
+        None."""
         func = node.func
         if not (self.tools and isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name)
                 and func.value.id == self.tools) or node.keywords:
@@ -434,15 +431,22 @@ _NOT_IN_BODIES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDe
                   ast.ImportFrom, ast.Delete, ast.Return, ast.Break, ast.Continue)
 
 
-def _body(fn: ast.FunctionDef) -> bool:
-    """Whether callers may take in the body of ``fn`` (:meth:`_Rewrite._body_of`): positional
-    parameters (defaults constant), no decorator, one ``return`` of a value, at its end, and
-    nothing of :data:`_NOT_IN_BODIES` before it."""
+def _plain(fn: ast.FunctionDef) -> bool:
+    """Whether ``fn`` has no decorator, only positional parameters and constant defaults, and
+    ends in a ``return`` of a value (after a docstring): what inlining and taking in need."""
     a, body = fn.args, _docless(fn.body)
-    if (fn.decorator_list or a.posonlyargs or a.vararg or a.kwonlyargs or a.kwarg
-            or not all(isinstance(d, ast.Constant) for d in a.defaults) or not body
-            or not isinstance(body[-1], ast.Return) or body[-1].value is None):
+    return not (fn.decorator_list or a.posonlyargs or a.vararg or a.kwonlyargs or a.kwarg
+                or not all(isinstance(d, ast.Constant) for d in a.defaults) or not body
+                or not isinstance(body[-1], ast.Return) or body[-1].value is None)
+
+
+def _body(fn: ast.FunctionDef) -> bool:
+    """Whether callers may take in the body of ``fn`` (:meth:`_Rewrite._body_of`): a
+    :func:`_plain` function with nothing of :data:`_NOT_IN_BODIES` before its ``return``
+    nor in its value."""
+    if not _plain(fn):
         return False
+    body = _docless(fn.body)
     return not any(isinstance(n, _NOT_IN_BODIES) for stmt in body[:-1] for n in ast.walk(stmt)) \
         and not any(isinstance(n, _NOT_IN_BODIES) for n in ast.walk(body[-1].value))
 
@@ -459,12 +463,10 @@ _FREE = {"abs", "_math", "_dr"}
 def _inlinable(fn: ast.FunctionDef):
     """(parameters, expression) of a rewritten term whose body is one ``return`` of an
     expression of its parameters alone (after a docstring), else None."""
-    body, a = _docless(fn.body), fn.args
-    if (len(body) != 1 or not isinstance(body[0], ast.Return) or body[0].value is None
-            or fn.decorator_list or a.posonlyargs or a.vararg or a.kwonlyargs or a.kwarg
-            or a.defaults):
+    body = _docless(fn.body)
+    if not _plain(fn) or len(body) != 1 or fn.args.defaults:
         return None
-    expr, params = body[0].value, [p.arg for p in a.args]
+    expr, params = body[0].value, [p.arg for p in fn.args.args]
     temps = {n.target.id for n in ast.walk(expr) if isinstance(n, ast.NamedExpr)}
     for sub in ast.walk(expr):
         if not isinstance(sub, _PURE):
@@ -612,7 +614,7 @@ class _Census:
     """What :func:`_unbox` and :func:`_scalarise` need to know of a function, in one walk:
     how often each name is stored, the values of its plain assignments, the names read as
     ``v.x``, ``v.y``, ``v.z`` (and how often), those stored as components, the names that
-    nested scopes use, and its parameters."""
+    nested scopes use, those stored in loops, and its parameters."""
 
     def __init__(self, fn):
         self.stores: dict[str, int] = {}
@@ -650,6 +652,9 @@ class _Census:
                 self.nested |= {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
         a = fn.args
         self.params = {p.arg for p in (*a.posonlyargs, *a.args, *a.kwonlyargs)}
+        #: the names stored inside a loop
+        self.looped = {n.id for loop in self.loops for n in ast.walk(loop)
+                       if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Load)}
 
 
 def _scalarise(fn: ast.FunctionDef) -> ast.FunctionDef:
@@ -657,27 +662,24 @@ def _scalarise(fn: ast.FunctionDef) -> ast.FunctionDef:
     Read the components of a direction into local names once: for a local name ``v`` that
     ``fn`` assigns exactly once, in a plain ``v = ...`` outside any loop, never in a nested
     scope, and whose ``v.x``, ``v.y``, ``v.z`` it reads at least four times in all (and never
-    stores), ``v_x, v_y, ... = v.x, v.y, ...`` follows the assignment and the reads become
+    stores), ``v__x, v__y, ... = v.x, v.y, ...`` follows the assignment and the reads become
     the names (an attribute read of a :class:`Vec3` costs about five times a local's). The
     value is the same: the terms never change a vector once it is made.
     """
     c = _Census(fn)
     chosen = {name: sorted(counts) for name, counts in c.reads.items()
               if sum(counts.values()) >= 4 and c.stores.get(name) == 1
-              and name not in c.params | c.nested | c.written}
+              and name not in c.params | c.nested | c.written | c.looped}
     if not chosen:
         return fn
 
     class Insert(ast.NodeTransformer):
-        def __init__(self):
-            self.loops = 0
-
         def _block(self, statements):
             out = []
             for stmt in statements:
                 stmt = self.visit(stmt)
                 out.extend(stmt if isinstance(stmt, list) else [stmt])
-                if (self.loops == 0 and isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
+                if (isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
                         and isinstance(stmt.targets[0], ast.Name)
                         and stmt.targets[0].id in chosen):
                     name = stmt.targets[0].id
@@ -691,8 +693,6 @@ def _scalarise(fn: ast.FunctionDef) -> ast.FunctionDef:
             return out
 
         def generic_visit(self, node):
-            loop = isinstance(node, (ast.For, ast.While, ast.AsyncFor))
-            self.loops += loop
             for field in ("body", "orelse", "finalbody"):
                 if isinstance(getattr(node, field, None), list) and \
                         all(isinstance(s, ast.stmt) for s in getattr(node, field)):
@@ -705,7 +705,6 @@ def _scalarise(fn: ast.FunctionDef) -> ast.FunctionDef:
                 elif isinstance(value, list):
                     setattr(node, field, [Reads().visit(v) if isinstance(v, ast.AST) else v
                                           for v in value])
-            self.loops -= loop
             return node
 
     class Reads(ast.NodeTransformer):
@@ -720,13 +719,14 @@ def _scalarise(fn: ast.FunctionDef) -> ast.FunctionDef:
 def _unbox(fn: ast.FunctionDef, kinds: dict, tools: str | None) -> ast.FunctionDef:
     """
     Keep a direction as three local names instead of a :class:`Vec3`, where ``fn`` only reads
-    its components or hands it to Mitsuba: for a local name ``v`` assigned once (never in a
-    nested scope) by a constructor of :class:`Vec3`, by :func:`read_vector` or by the variant
-    tools' ``direction``, and otherwise only read as ``v.x``, ``v.y``, ``v.z`` or passed
-    alone to :func:`to_mitsuba` (or the tools' ``to_mitsuba``), the assignment becomes
-    ``v__x, v__y, v__z = ...`` (the constructor's arguments, or the floats of the direction:
-    a ``mi.Vector3f``'s directly, anything else through ``direction``), the reads the names,
-    and ``to_mitsuba(v)`` a ``mi.Vector3f`` of them. ``kinds`` names the globals that are
+    its components or hands it to Mitsuba: for a local name ``v`` (never in a nested scope)
+    that every assignment gives a constructor of :class:`Vec3`, :func:`read_vector`, the
+    variant tools' ``direction`` or another such name, and that is otherwise only read as
+    ``v.x``, ``v.y``, ``v.z`` or passed alone to :func:`to_mitsuba` (or the tools'
+    ``to_mitsuba``), each assignment becomes ``v__x, v__y, v__z = ...`` (the constructor's
+    arguments, the other name's, or the floats of the direction: a ``mi.Vector3f``'s directly,
+    anything else through ``direction``), the reads the names, and ``to_mitsuba(v)`` a
+    ``mi.Vector3f`` of them. ``kinds`` names the globals that are
     :class:`Vec3` ('new'), :func:`read_vector` ('read') and :func:`to_mitsuba` ('out').
     """
     def kind(func) -> str | None:
@@ -736,6 +736,13 @@ def _unbox(fn: ast.FunctionDef, kinds: dict, tools: str | None) -> ast.FunctionD
         if (tools and isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name)
                 and func.value.id == tools):
             return {"direction": "direction", "to_mitsuba": "out"}.get(func.attr)
+        return None
+
+    def handed(call) -> ast.Name | None:
+        """The name ``v`` of a call ``to_mitsuba(v)``, else None."""
+        if (isinstance(call, ast.Call) and kind(call.func) == "out" and len(call.args) == 1
+                and not call.keywords and isinstance(call.args[0], ast.Name)):
+            return call.args[0]
         return None
 
     def made(value) -> str | None:
@@ -748,9 +755,7 @@ def _unbox(fn: ast.FunctionDef, kinds: dict, tools: str | None) -> ast.FunctionD
 
     c = _Census(fn)
     uses = set(c.component_names)  # ids of the Name nodes read as v.x, ... or to_mitsuba(v)
-    uses |= {id(call.args[0]) for call in c.calls
-             if kind(call.func) == "out" and len(call.args) == 1 and not call.keywords
-             and isinstance(call.args[0], ast.Name)}
+    uses |= {id(handed(call)) for call in c.calls if handed(call) is not None}
     assigned = c.assigned
     # every store of a chosen name is 'v = <a maker>' or 'v = w' of another chosen name w
     chosen = {name for name, values in assigned.items()
@@ -804,10 +809,10 @@ def _unbox(fn: ast.FunctionDef, kinds: dict, tools: str | None) -> ast.FunctionD
             return ast.copy_location(ast.Assign([target], out), node)
 
         def visit_Call(self, node):
-            if (kind(node.func) == "out" and len(node.args) == 1 and not node.keywords
-                    and isinstance(node.args[0], ast.Name) and node.args[0].id in chosen):
+            name = handed(node)
+            if name is not None and name.id in chosen:
                 return ast.copy_location(ast.Call(ast.Name("_mi_vector_class", ast.Load()),
-                                                  parts(node.args[0].id, ast.Load), []), node)
+                                                  parts(name.id, ast.Load), []), node)
             return self.generic_visit(node)
 
         def visit_Attribute(self, node):
@@ -963,24 +968,27 @@ def configure(obj, values: tuple, nones: tuple = (), methods: tuple = ("eval_pdf
     known = {f"self.{a}": getattr(obj, a) is None for a in nones}
     key = (tuple(config.items()), tuple(known.items()), methods)
     functions = vars(cls).get("__configured__", {}).get(key)
-    if functions is None and PROMOTE_AFTER > 0:
+    if functions is not None:
+        _bind(obj, functions)
+    elif PROMOTE_AFTER > 0:
         _count_calls(obj, methods, lambda: _promote(obj, key, config, known, methods))
-        return
-    if functions is None:
-        functions = _promote(obj, key, config, known, methods)
+    else:
+        _promote(obj, key, config, known, methods)
+
+
+def _bind(obj, functions: dict) -> None:
+    """Make ``functions`` ``obj``'s own methods (where Mitsuba's calls find them first)."""
     for name, fn in functions.items():
         obj.__dict__[name] = types.MethodType(fn, obj)
 
 
-def _promote(obj, key, config: dict, known: dict, methods) -> dict:
+def _promote(obj, key, config: dict, known: dict, methods) -> None:
     """Compile ``obj``'s class (once) and its configuration (once), bind them to ``obj``."""
     with _lock:
         cls = compiled_class(type(obj))
         functions = cls.__configured__.get(key) or _configured(cls, config, known, methods)
         cls.__configured__[key] = functions
-    for name, fn in functions.items():
-        obj.__dict__[name] = types.MethodType(fn, obj)
-    return functions
+    _bind(obj, functions)
 
 
 def _count_calls(obj, methods, promote) -> None:
@@ -1045,10 +1053,8 @@ def _fold(fn: ast.FunctionDef, values: dict, nones: dict) -> ast.FunctionDef:
         # the locals assigned once (outside loops) a constant, or an attribute of nones, in
         # what is left: put in by the next round
         c = _Census(fn)
-        looped = {n.id for loop in c.loops for n in ast.walk(loop)
-                  if isinstance(n, ast.Name) and not isinstance(n.ctx, ast.Load)}
         single = {name for name, count in c.stores.items()
-                  if count == 1 and name not in c.params | c.nested | looped
+                  if count == 1 and name not in c.params | c.nested | c.looped
                   and len(c.assigned.get(name, ())) == 1}
         found = {name: c.assigned[name][0].value for name in single
                  if isinstance(c.assigned[name][0], ast.Constant)}

@@ -79,7 +79,7 @@ def r0(eta, k):
 
 def schlick(cos_theta_i, eta, k):
     """Schlick's approximation R0 + (1 − R0)(1 − cosθi)⁵, with R0 from η and k."""
-    return schlick_at(schlick_incidence(cos_theta_i), schlick_constants(eta, k))
+    return schlick_at(schlick_incidence(cos_theta_i), r0(eta, k))
 
 
 def schlick_incidence(cos_theta_i):
@@ -89,14 +89,9 @@ def schlick_incidence(cos_theta_i):
     return x2 * x2 * x
 
 
-def schlick_constants(eta, k):
-    """R0: the material's part of :func:`schlick` (:func:`r0`)."""
-    return r0(eta, k)
-
-
 def schlick_at(inc, const):
     """:func:`schlick` from its parts, ``inc`` of :func:`schlick_incidence` and ``const`` of
-    :func:`schlick_constants` (as :func:`exact_at`)."""
+    :func:`r0`, the material's part (as :func:`exact_at`)."""
     return const + (1.0 - const) * inc
 
 
