@@ -60,7 +60,7 @@ def test06_scalar_processes_equal_one_thread(variant_scalar_rgb):
 
 def test07_scalar_forced_into_processes(variant_scalar_rgb, monkeypatch):
     """With worker start-up made free, the pool path runs and matches the in-process image."""
-    import mi_brdfs.render as R
+    import mi_brdfs.render_pool as R
     monkeypatch.setattr(R, "WORKER_START_S", 0.0)
     defines = {"res": "8", "material": "lambert", "max_depth": "3"}
     two = render("cbox", spp=8, pass_spp=2, defines=defines, processes=2, progress=False)
@@ -103,7 +103,7 @@ def test10_helpers_never_spawn_helpers(tmp_path):
     script = tmp_path / "unguarded.py"
     script.write_text(
         "import multiprocessing as mp\n"
-        "from mi_brdfs.render import _is_main_process\n"
+        "from mi_brdfs.render_pool import _is_main_process\n"
         "print('main' if _is_main_process() else 'helper', flush=True)\n"
         "if mp.current_process().name == 'MainProcess':  # the test's own guard: one child\n"
         "    with mp.get_context('spawn').Pool(1) as pool:\n"
@@ -135,7 +135,7 @@ def test12_helpers_kept_for_the_next_render(variant_scalar_rgb, monkeypatch, tmp
     when its file was edited (a render of another scene times its first pass here first, then
     spreads where loading it there pays), and close_helpers ends them.
     """
-    import mi_brdfs.render as R
+    import mi_brdfs.render_pool as R
     monkeypatch.setattr(R, "WORKER_START_S", 0.0)
     monkeypatch.setattr(R, "WORKER_LOAD_S", 0.0)
     from mi_brdfs.scenes import scene_path
@@ -162,7 +162,7 @@ def test13_kept_helpers_start_at_once_on_the_same_scene(variant_scalar_rgb, monk
     """A render of the scene the kept helpers rendered last hands them its first pass at once
     (two passes run side by side from the start); a render of another scene first times a
     pass here."""
-    import mi_brdfs.render as R
+    import mi_brdfs.render_pool as R
     monkeypatch.setattr(R, "WORKER_START_S", 0.0)
     monkeypatch.setattr(R, "WORKER_LOAD_S", 0.0)
     defines = {"res": "8", "material": "lambert", "max_depth": "3"}
