@@ -4,7 +4,7 @@ elements and their byte spans (nested, self-closing, in comments), a simplificat
 independently (the original and the simplified file rendered at other seeds and compared), the
 bytes outside the replaced elements, lambert → diffuse at zero bias, a wrong candidate that
 the measurement rejects and the independent re-measurement catches, the cache, and one-line
-errors. About 15 s on two cores.
+errors.
 """
 
 import math
@@ -15,9 +15,9 @@ import pytest
 from helpers import cli_one_line_error
 
 import mi_brdfs
-from mi_brdfs import simplify as simplify_module
 from mi_brdfs.cli import main
 from mi_brdfs.errors import MiBrdfsError
+from mi_brdfs.simplify import pipeline as simplify_pipeline  # simplify() calls candidates_for
 from mi_brdfs.simplify import scene_bsdfs, simplify, splice
 
 TOLERANCE = 0.05
@@ -231,7 +231,7 @@ def test04_wrong_candidate_rejected_and_caught(tmp_path, monkeypatch):
     candidate exceeds the tolerance, so it would have caught it.
     """
     mi_brdfs.use_variant("llvm_ad_rgb")
-    real = simplify_module.candidates_for
+    real = simplify_pipeline.candidates_for
 
     def wrong(material, values, fit_fn):
         out = []
@@ -243,7 +243,7 @@ def test04_wrong_candidate_rejected_and_caught(tmp_path, monkeypatch):
             out.append((label, kind, element, note))
         return out
 
-    monkeypatch.setattr(simplify_module, "candidates_for", wrong)
+    monkeypatch.setattr(simplify_pipeline, "candidates_for", wrong)
     path = write_scene(tmp_path)
     out = tmp_path / "simplified.xml"
     result = simplify(path, TOLERANCE, output=out, cache=False, confidence=0, **SMALL)

@@ -37,7 +37,7 @@ def main(argv=None) -> None:
     args = p.parse_args(argv)
     mi_brdfs.use_variant("llvm_ad_rgb")
     from mi_brdfs.benchmark.strategies import LOBES, random_draws, own
-    from mi_brdfs.benchmark.timing import interleaved, kernel_ir, kernel_timed, traced_kernels
+    from mi_brdfs.timing import interleaved, kernel_ir, kernel_timed, traced_kernels
     from mi_brdfs.bsdfspec import load_bsdf
 
     # the Smith lobe of the benchmark's strategies, the plugin's and the built-in's samplers

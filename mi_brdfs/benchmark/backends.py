@@ -16,7 +16,7 @@ from ..campaign.core import Context, Row, Section, md_table
 from ..render import render
 from ..scattering import floats
 from ..scenes import load_scene
-from .timing import interleaved, median, median_ratio, timed
+from ..timing import interleaved, median, median_ratio, timed
 
 #: Render-time targets against the built-ins: llvm_ad_rgb, scalar_rgb, and the llvm overhead of
 #: many material instances in one scene.

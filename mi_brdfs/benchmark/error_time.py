@@ -19,7 +19,7 @@ import numpy as np
 from ..compare import flip_map, rel_mse, rmse
 from ..scenes import load_scene
 from ..campaign.core import Context, Row, Section, image, md_table
-from .timing import interleaved, median
+from ..timing import interleaved, median
 
 #: The showcase's sphere materials (scenes/showcase.xml, ids "<sphere>-material"): every one
 #: is swapped for the contender, so the whole image measures it.

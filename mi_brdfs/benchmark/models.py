@@ -15,7 +15,7 @@ from ..campaign.core import Context, Row, Section, md_table
 from ..checks import batch
 from ..plugins.materials import conductor_ior
 from ..reference import cooktorrance as ref
-from .timing import interleaved, kernel_timed, median, median_ratio
+from ..timing import interleaved, kernel_timed, median, median_ratio
 
 #: (choice, A, B): eval cost of A relative to B.
 CHOICES = [

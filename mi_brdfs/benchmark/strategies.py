@@ -22,7 +22,7 @@ import numpy as np
 from ..bsdfspec import load_bsdf
 from ..campaign.core import Context, Row, Section, md_table
 from ..checks import batch
-from .timing import interleaved, kernel_timed, median
+from ..timing import interleaved, kernel_timed, median
 
 _CT = {"type": "cooktorrance", "alpha": 0.2, "fresnel": "none"}
 _RC = {"type": "roughconductor", "alpha": 0.2}

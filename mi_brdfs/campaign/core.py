@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ..checks.result import CheckResult
 from ..errors import MiBrdfsError, MiBrdfsWarning
+from ..markdown import md_table  # noqa: F401 (the sections import it from here)
 from ..progress import Progress
 
 
@@ -104,15 +105,6 @@ class Section:
 
 def _fmt(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
-
-
-def md_table(header, rows) -> str:
-    """A Markdown table; a '|' inside a cell (|x|) is escaped."""
-    def cell(c) -> str:
-        return str(c).replace("|", "\\|")
-    lines = ["| " + " | ".join(cell(h) for h in header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(cell(c) for c in row) + " |" for row in rows]
-    return "\n".join(lines)
 
 
 def image(ctx: Context, path: Path, alt: str) -> str:

@@ -96,7 +96,7 @@ def test04_sampling_strategies_time_the_pdf(variant_llvm_ad_rgb):
     import numpy as np
 
     from mi_brdfs.benchmark.strategies import random_draws, own
-    from mi_brdfs.benchmark.timing import kernel_ir, traced_kernels
+    from mi_brdfs.timing import kernel_ir, traced_kernels
     from mi_brdfs.bsdfspec import load_bsdf
 
     bsdf = load_bsdf({"type": "roughconductor", "alpha": 0.2, "sample_visible": False})

@@ -1,0 +1,336 @@
+"""
+:func:`simplify`, step by step: the scene read and checked, the engine and its cache set up,
+the candidates of every material measured, the choice made, the simplified scene verified at
+other seeds, and the scene file and the report written (see :mod:`mi_brdfs.simplify`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+import time
+from pathlib import Path
+
+from ..errors import MiBrdfsError, counts, mitsuba_error_line
+from .candidates import _cached_fit, candidates_for
+from .choose import _choose, _derive, _predict
+from .measure import (
+    CACHE_VERSION, MAX_SEEDS, _Cache, _Engine, _key, _original_numbers, default_cache_dir,
+)
+from .report import Candidate, MaterialResult, SimplifyResult, plot, write_report
+from .scene import element_text, scene_bsdfs, splice
+
+#: Settings (full, quick): spp per seed, timing repeats, seconds per timing render, resolution
+#: of ``--quick`` (through ``-D res=`` where the scene declares that default).
+SPP = (64, 16)
+REPEATS = (7, 3)
+TIMING_S = (0.15, 0.04)
+QUICK_RES = 128
+
+#: Fit sizes (full, quick).
+FIT_SIZES = ({}, {"pairs": 4096, "steps": 200, "thetas_deg": (0.0, 45.0, 80.0)})
+
+
+def _public(fn):
+    """``fn`` under the name of :mod:`mi_brdfs.simplify`, which exports it (the one-line error
+    of a bad count names ``simplify.simplify``, as it always has)."""
+    fn.__module__ = "mi_brdfs.simplify"
+    return fn
+
+
+def _check_tolerance(tolerance) -> float:
+    ok = isinstance(tolerance, (int, float)) and not isinstance(tolerance, bool) \
+        and math.isfinite(tolerance) and tolerance > 0
+    if not ok:
+        raise MiBrdfsError(f"simplify: tolerance = {tolerance!r} is invalid: must be a finite "
+                           f"number > 0 (a relative RMSE, e.g. 0.01)")
+    return float(tolerance)
+
+
+def _report_dir(report) -> Path | None:
+    if report is None:
+        return None
+    from ..imageio import output_folder
+
+    return output_folder(report, f"report {report}", "SIMPLIFY.md")
+
+
+@counts("spp", "repeats")
+@_public
+def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, output=None,
+             report=None, quick: bool = False, spp: int | None = None,
+             defines: dict | None = None, cache=True, confidence: float = 2.0,
+             fits: bool = True, repeats: int | None = None,
+             progress: bool = False) -> SimplifyResult:
+    """
+    Measure cheaper candidates for every material of ``scene`` and write the simplified scene
+    (see :mod:`mi_brdfs.simplify`).
+
+    Parameter ``scene``: a scene file or bundled name. ``tolerance``: on the relative RMSE
+    (RMSE over the reference image's mean) of the converged image against the original's.
+    ``variant``: Mitsuba variant (default: the current one, else llvm_ad_rgb where it works).
+    ``output``: where to write the simplified scene (None: not written). ``report``: a folder
+    for SIMPLIFY.md, the plot and (by default) the cache. ``quick``: ``res`` of
+    :data:`QUICK_RES` (where the scene declares that default) and fewer spp, repeats and fit
+    steps. ``spp``: per seed, for the original and every candidate. ``defines``: ``<default>``
+    overrides. ``cache``: True (``report/cache`` or :func:`default_cache_dir`), a folder, or
+    False. ``confidence``: standard errors by which a speed-up must exceed 1 to replace a
+    material (0: any estimated gain). ``fits``: also fit cheaper models. ``repeats``: timing
+    pairs per candidate.
+
+    Returns → :class:`SimplifyResult`. Raises MiBrdfsError (one line) for bad input.
+    """
+    from ..progress import Progress
+
+    clock = time.perf_counter()
+    tolerance = _check_tolerance(tolerance)
+    if not (isinstance(confidence, (int, float)) and math.isfinite(confidence)):
+        raise MiBrdfsError(f"simplify: confidence = {confidence!r} is invalid: must be finite")
+    path, data, out, report_dir, materials, scene_defaults = _read(scene, output, report)
+    variant = _use_variant(variant)
+    defines, notes = _defines(path, defines, scene_defaults, quick)
+    level = 1 if quick else 0
+    spp = spp or SPP[level]
+    repeats = repeats or REPEATS[level]
+    values = dict(scene_defaults, **defines)
+    store, engine = _engine(path, data, report_dir, cache, variant, defines, spp, repeats, level)
+    fit_fn = _cached_fit(store, FIT_SIZES[level], variant)
+
+    # candidates of every material (fits included), then the measurements
+    plans = _plans(materials, values, fit_fn if fits else None, notes)
+    total = 2 + sum(len(c) for _, c in plans)
+    bar = Progress(total, label=f"simplify {path.name}", unit=" scenes") if progress else None
+    try:
+        results = _measure(plans, engine, data, tolerance, bar)
+        ref_numbers, original_time = _decide(results, engine, tolerance, confidence)
+        predicted = _within_together(results, ref_numbers, tolerance, original_time, notes)
+        verification, replacements, text, predicted = _verify(
+            results, data, engine, ref_numbers, tolerance, original_time, predicted, notes)
+        if bar:
+            bar.update(total, note="verified")
+    finally:
+        if bar:
+            bar.close()
+
+    measured = {}
+    if verification is not None and verification.ok:
+        measured = {"speedup": verification.speedup, "bias": verification.bias}
+    result = SimplifyResult(scene=path, tolerance=tolerance, variant=variant, spp=spp,
+                            defines=defines, quick=quick, materials=results,
+                            original=ref_numbers, replacements=replacements, text=text,
+                            verification=verification, predicted=predicted, measured=measured,
+                            notes=notes, renders=engine.renders)
+    if out is not None:
+        _write_scene(result, out)
+    result.seconds = time.perf_counter() - clock
+    if report_dir is not None:
+        result.figure = plot(result, report_dir / "simplify.png")
+        result.report = write_report(result, report_dir / "SIMPLIFY.md")
+    return result
+
+
+def _read(scene, output, report) -> tuple:
+    """
+    (path, bytes, output path or None, report folder or None, materials, ``<default>`` values)
+    of the scene, each checked before any work.
+    """
+    from ..imageio import check_writable
+    from ..scenes import scene_path
+
+    path = scene_path(scene)
+    data = path.read_bytes()
+    out = check_writable(output) if output is not None else None
+    if out is not None and out.resolve() == path.resolve():
+        raise MiBrdfsError(f"simplify: the output {out} is the scene itself: write the "
+                           f"simplified scene to another file")
+    report_dir = _report_dir(report)
+    materials, scene_defaults = scene_bsdfs(data)
+    if not materials:
+        raise MiBrdfsError(f"{path.name} has no <bsdf>: nothing to simplify")
+    return path, data, out, report_dir, materials, scene_defaults
+
+
+def _use_variant(variant: str | None) -> str:
+    """The variant measured in: ``variant``, else the current one, else the default."""
+    import mitsuba as mi
+
+    import mi_brdfs
+
+    if variant is not None or mi.variant() is None:
+        mi_brdfs.use_variant(variant)
+    return mi.variant()
+
+
+def _defines(path: Path, defines: dict | None, scene_defaults: dict, quick: bool) -> tuple:
+    """(defines as strings, notes): each must name a ``<default>`` of the scene; ``quick``
+    adds ``res`` where the scene declares it."""
+    defines = {k: str(v) for k, v in (defines or {}).items()}
+    unknown = sorted(set(defines) - set(scene_defaults))
+    if unknown:
+        raise MiBrdfsError(f"{path.name} declares no <default> for {', '.join(unknown)} (a "
+                           f"define must name a <default name=...> of the scene)")
+    notes = []
+    if quick and "res" not in defines:
+        if "res" in scene_defaults:
+            defines["res"] = str(QUICK_RES)
+        else:
+            notes.append("--quick: the scene declares no <default name=\"res\">, so it renders "
+                         "at its own resolution")
+    return defines, notes
+
+
+def _engine(path: Path, data: bytes, report_dir: Path | None, cache, variant: str,
+            defines: dict, spp: int, repeats: int, level: int) -> tuple:
+    """(cache, engine): the cache folder of ``cache`` for this scene's content, and the engine
+    whose measurements are stored under a key of every setting."""
+    import mitsuba as mi
+
+    from .. import __version__
+
+    if cache is True:
+        cache_dir = (report_dir / "cache") if report_dir else default_cache_dir()
+    elif cache:
+        cache_dir = Path(cache).expanduser()
+    else:
+        cache_dir = None
+    scene_hash = hashlib.sha256(data).hexdigest()
+    store = _Cache(cache_dir / scene_hash[:16] if cache_dir else None)
+    settings = {"version": CACHE_VERSION, "mi_brdfs": __version__, "mitsuba": mi.__version__,
+                "variant": variant, "defines": defines, "spp": spp, "repeats": repeats,
+                "timing_s": TIMING_S[level], "scene": scene_hash}
+    engine = _Engine(path, data, defines, spp, repeats, TIMING_S[level], MAX_SEEDS, store,
+                     _key(settings))
+    return store, engine
+
+
+def _plans(materials: list, values: dict, fit_fn, notes: list) -> list:
+    """(material, its candidates) of every material; a material whose candidates fail gets
+    none, and a note."""
+    plans = []
+    for mat in materials:
+        try:
+            cands = candidates_for(mat, values, fit_fn)
+        except MiBrdfsError as e:
+            cands = []
+            notes.append(f"{mat.label}: no candidates ({e})")
+        plans.append((mat, cands))
+    return plans
+
+
+def _measure(plans: list, engine: _Engine, data: bytes, tolerance: float, bar) -> list:
+    """The original, then every candidate in the scene with only its material replaced: a
+    :class:`MaterialResult` per material (the original first), the progress ``bar`` updated."""
+    done = 0
+    engine.info()
+    done += 1
+    if bar:
+        bar.update(done, note="the original")
+    results = []
+    for mat, cands in plans:
+        entries = [Candidate("original", "original", mat.text)]
+        for label, kind, element, note in cands:
+            c = Candidate(label, kind, note=note)
+            if element is None:
+                c.error = note or "no candidate"
+            else:
+                c.xml = element_text(element, mat.indent)
+                try:
+                    c.measured, c.cached = engine.measure(
+                        splice(data, {(mat.start, mat.end): c.xml}), tolerance)
+                except (MiBrdfsError, RuntimeError) as e:
+                    c.error = mitsuba_error_line(e)
+            entries.append(c)
+            done += 1
+            if bar:
+                bar.update(done, note=f"{mat.label}: {label}"[:50])
+        results.append(MaterialResult(mat, entries))
+    return results
+
+
+def _decide(results: list, engine: _Engine, tolerance: float, confidence: float) -> tuple:
+    """
+    (the original's numbers, its time to the tolerance): every measured candidate derived
+    against them (the original as one with ratios 1 and no bias), and each material's choice.
+    """
+    ref_numbers = _original_numbers(results, engine)
+    original_time = ref_numbers["variance_1spp_ref"] * ref_numbers["ref_seconds_per_spp"] \
+        / tolerance ** 2
+    for r in results:
+        r.candidates[0].measured = dict(ref_numbers, b2=0.0, b2_se=0.0, noise=0.0,
+                                        bias=0.0, bias_hi=0.0, bias_lo=0.0,
+                                        variance_ratio=1.0, variance_ratio_se=0.0,
+                                        cost_ratio=1.0, cost_ratio_se=0.0, flip=None)
+        for c in r.candidates:
+            if c.ok:
+                _derive(c, ref_numbers, tolerance, original_time)
+        _choose(r, tolerance, confidence)
+    return ref_numbers, original_time
+
+
+def _within_together(results: list, ref_numbers: dict, tolerance: float, original_time: float,
+                     notes: list) -> dict:
+    """The prediction of :func:`_predict`, once the chosen replacements whose bias² add up
+    beyond τ² are dropped, the largest first."""
+    predicted = _predict(results, ref_numbers, tolerance, original_time)
+    while predicted["bias"] > tolerance:  # the parts' bias² add up beyond τ²
+        worst = max((r for r in results if r.chosen),
+                    key=lambda r: r.candidates[r.chosen].measured["b2"])
+        notes.append(f"the chosen replacements' biases add up beyond the tolerance: "
+                     f"{worst.label} kept as it was")
+        worst.candidates[worst.chosen].verdict = "within alone, not with the others"
+        worst.chosen, worst.reason = 0, "kept: the replacements together exceed the tolerance"
+        worst.candidates[0].verdict = "kept"
+        predicted = _predict(results, ref_numbers, tolerance, original_time)
+    return predicted
+
+
+def _verify(results: list, data: bytes, engine: _Engine, ref_numbers: dict, tolerance: float,
+            original_time: float, predicted: dict, notes: list) -> tuple:
+    """
+    (verification or None, replacements, simplified text, prediction): the simplified scene
+    measured at the seeds of 'verify'; while its bias bound exceeds the tolerance, the chosen
+    replacement with the largest bias is dropped and the scene measured again.
+    """
+    verification = None
+    while True:
+        chosen = [r for r in results if r.chosen]
+        replacements = {(r.material.start, r.material.end): r.candidates[r.chosen].xml
+                        for r in chosen}
+        text = splice(data, replacements)
+        if not chosen:
+            verification = None  # none left: the original, which needs no verification
+            break
+        # independent seeds and timing: the simplified scene is measured afresh, even where
+        # it is one candidate's scene
+        verification = Candidate("simplified scene", "simplified")
+        verification.measured, verification.cached = engine.measure(text, tolerance, "verify")
+        _derive(verification, ref_numbers, tolerance, original_time)
+        if verification.bias_hi <= tolerance:
+            break
+        worst = max(chosen, key=lambda r: r.candidates[r.chosen].measured["b2"])
+        notes.append(f"the simplified scene's bias {verification.bias:.4f} (bound "
+                     f"{verification.bias_hi:.4f}, {verification.measured['seeds']} seeds) "
+                     f"was not within the tolerance: {worst.label} kept as it was")
+        worst.candidates[worst.chosen].verdict = "within alone, not with the others"
+        worst.chosen, worst.reason = 0, "kept: the replacements together exceeded the " \
+                                        "tolerance"
+        worst.candidates[0].verdict = "kept"
+        predicted = _predict(results, ref_numbers, tolerance, original_time)
+    return verification, replacements, text, predicted
+
+
+def _write_scene(result: SimplifyResult, out: Path) -> None:
+    """Write the simplified scene atomically and check that it loads."""
+    from ..imageio import atomic_path
+    from ..scenes import load_scene
+
+    with atomic_path(out, ".xml") as tmp:
+        Path(tmp).write_bytes(result.text)
+    result.output = out
+    if out.parent.resolve() != result.scene.parent.resolve() and \
+            re.search(rb'name="filename"', result.text):
+        result.notes.append(f"{out} lies in another folder than {result.scene.name}, whose "
+                            f"relative file names (meshes, textures) then resolve elsewhere")
+        return
+    load_scene(out, result.defines)
