@@ -86,3 +86,67 @@ def cli_one_line_error(args, message):
     assert len(lines) == 1 and lines[0].startswith("mi-brdfs: error: "), text
     assert message in lines[0] and "Traceback" not in text, lines[0]
     return lines[0]
+
+
+#: The absolute step of :func:`reference_conditioning`, the one the checks use
+#: (:data:`mi_brdfs.checks.consistency.STEP`): float32 directions, and every direction a float32
+#: computation derives from them (a half vector, a refracted ray), carry absolute errors of a few
+#: units of the last place at 1.
+def _step():
+    from mi_brdfs.checks.consistency import STEP
+    return STEP
+
+
+def reference_conditioning(f, wi, wo):
+    """
+    How much the float64 function ``f(wi, wo)`` (values (n,) or (n, channels)) moves, relative
+    to itself, when one coordinate of ``wi`` or ``wo`` moves by the float32 step
+    :func:`_step` (12 evaluations; the largest change per pair). A float32 evaluation of the
+    same model can differ from ``f`` by that much through the rounding of its directions alone,
+    whichever CPU compiled it (drjit compiles for the host: the last bits differ between CPUs).
+    """
+    def rows(x):
+        x = np.asarray(x, dtype=np.float64)
+        return x.reshape(len(x), -1)
+
+    base = rows(f(wi, wo))
+    scale = np.maximum(np.abs(base), np.finfo(np.float64).tiny)
+    spread = np.zeros(len(wi))
+    for which in range(2):
+        for axis in range(3):
+            for sign in (-1.0, 1.0):
+                a, b = np.array(wi, dtype=np.float64), np.array(wo, dtype=np.float64)
+                (a if which == 0 else b)[:, axis] += sign * _step()
+                change = np.abs(rows(f(a, b)) - base) / scale
+                spread = np.fmax(spread, np.nan_to_num(change, nan=0.0).max(axis=1))
+    return spread
+
+
+#: A difference within this many times the conditioning (:func:`reference_conditioning`) is
+#: rounding; the checks use the same factor (:data:`mi_brdfs.checks.consistency.CONDITIONING_FACTOR`).
+CONDITIONING_FACTOR = 8.0
+
+
+def assert_matches_reference(value, f, wi, wo, rtol, what=""):
+    """
+    A float32 evaluation ``value`` (n,) or (n, channels) of a model against its float64
+    reference ``f(wi, wo)``: per pair, |value − f| ≤ (rtol + 8·conditioning)·|f| + atol, where
+    the conditioning is :func:`reference_conditioning` and atol is 1e-6 of the largest |f|
+    (float32 keeps about 7 digits of the largest value a sum or a lobe is made of). No floor
+    cuts through the data: the tolerance grows smoothly with |f|. Returns the largest ratio of
+    difference to tolerance.
+    """
+    def rows(x):
+        x = np.asarray(x, dtype=np.float64)
+        return x.reshape(len(x), -1)
+
+    a, b = rows(value), rows(f(wi, wo))
+    cond = reference_conditioning(f, wi, wo)[:, None]
+    tol = (rtol + CONDITIONING_FACTOR * cond) * np.abs(b) + 1e-6 * np.abs(b).max()
+    ratio = np.abs(a - b) / tol
+    i = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
+    assert ratio[i] <= 1.0, (
+        f"{what}: {a[i]:.6g} against the float64 reference {b[i]:.6g} at wi = {wi[i[0]]}, "
+        f"wo = {wo[i[0]]}: difference {abs(a[i] - b[i]):.3g} > tolerance {tol[i]:.3g} "
+        f"(rtol {rtol:g}, conditioning {cond[i[0], 0]:.3g})")
+    return float(ratio[i])

@@ -4,16 +4,10 @@ from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
-from . import _common
+from . import lobes, properties
 
-V = _common.variant_tools()
-# Bound once per variant: in scalar variants these are looked up at every call otherwise.
-Spectrum, Float = mi.Spectrum, mi.Float
-cosine_hemisphere_pdf = mi.warp.square_to_cosine_hemisphere_pdf
-DIFFUSE = _common.flag("DiffuseReflection")
-FLAGS = _common.flag("DiffuseReflection", "FrontSide")
+FLAGS = lobes.flag("DiffuseReflection", "FrontSide")
 
 
 class Lambert(mi.BSDF):
@@ -58,44 +52,35 @@ class Lambert(mi.BSDF):
     def __init__(self, props):
         super().__init__(props)
         #: Diffuse albedo ρ.
-        self.m_reflectance = _common.reflectance(props, "lambert", "reflectance", 0.5)
+        self.m_reflectance = properties.reflectance(props, "lambert", "reflectance", 0.5)
         self.m_flags = FLAGS
         self.m_components = [FLAGS]
-        self.parameters_changed()
 
     def sample(self, ctx, si, sample1, sample2, active=True):
-        bs = V.new_sample()
+        bs = lobes.new_sample()
+        if not ctx.is_enabled(mi.BSDFFlags.DiffuseReflection):
+            return bs, mi.Spectrum(0.0)
         active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
-        if V.none(active) or not ctx.is_enabled(DIFFUSE):
-            return bs, Spectrum(0.0)
+        if lobes.none(active):
+            return bs, mi.Spectrum(0.0)
         # ωo from the cosine-weighted hemisphere, pdf cosθo/π
-        wo, pdf = V.cosine_sample(bs, sample2)
+        wo, pdf = lobes.cosine_sample(bs, sample2)
         # weight = f·cosθo / pdf = (ρ/π·cosθo) / (cosθo/π) = ρ
-        weight = V.spectrum(self._rho(si, active))
-        return bs, V.select(active & (pdf > 0), V.depolarize(weight), 0.0)
+        weight = self.m_reflectance.eval(si, active)
+        return bs, dr.select(active & (pdf > 0), lobes.depolarize(weight), 0.0)
 
-    eval, pdf, eval_pdf = V.diffuse_methods()
+    eval, pdf = lobes.diffuse_eval, lobes.diffuse_pdf
+    eval_pdf = lobes.diffuse_eval_pdf
 
     def _eval_pdf(self, si, wo, active):
         """(f·cosθo, pdf) at ``wo``, for eval, pdf and eval_pdf."""
-        wo = V.vector(wo)
+        wo = lobes.vector(wo)
         active = active & (si.wi.z > 0) & (wo.z > 0)  # one-sided, like `diffuse`
-        if V.none(active):
-            return Spectrum(0.0), Float(0.0)
-        # f·cosθo = ρ/π·cosθo; pdf: the cosine-weighted hemisphere's
-        value = V.scale(self._rho_over_pi(si, active), wo.z)
-        pdf = cosine_hemisphere_pdf(wo)
-        return V.select(active, V.depolarize(value), 0.0), V.select(active, pdf, 0.0)
-
-    def _rho(self, si, active):
-        """ρ at ``si``: per-channel floats when constant in a scalar RGB variant, else a
-        spectrum."""
-        return self._rho_channels or self.m_reflectance.eval(si, active)
-
-    def _rho_over_pi(self, si, active):
-        """ρ/π, the BRDF, in the same form as :meth:`_rho` (channels rounded to float32, as
-        ``diffuse`` computes ρ·(1/π) in float32)."""
-        return self._rho_pi_channels or self.m_reflectance.eval(si, active) * dr.inv_pi
+        # f·cosθo = ρ/π·cosθo, in diffuse's order of operations; pdf: the cosine-weighted
+        # hemisphere's
+        value = self.m_reflectance.eval(si, active) * dr.inv_pi * wo.z
+        pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
+        return lobes.finish(value, pdf, active)
 
     def eval_diffuse_reflectance(self, si, active=True):
         return self.m_reflectance.eval(si, active)
@@ -103,14 +88,5 @@ class Lambert(mi.BSDF):
     def traverse(self, cb):
         cb.put("reflectance", self.m_reflectance, mi.ParamFlags.Differentiable)
 
-    def parameters_changed(self, keys=()):
-        # a constant ρ is read once where the variant allows it (see _common.variant_tools)
-        self._rho_channels = self._rho_pi_channels = None
-        if V.per_channel:
-            self._rho_channels = _common.constant_channels(self.m_reflectance)
-        if self._rho_channels is not None:
-            self._rho_pi_channels = [float(np.float32(c) * np.float32(dr.inv_pi))
-                                     for c in self._rho_channels]
-
     def to_string(self):
-        return f"Lambert[\n  reflectance = {_common.indent(self.m_reflectance)}\n]"
+        return f"Lambert[\n  reflectance = {properties.indent(self.m_reflectance)}\n]"

@@ -10,8 +10,8 @@ import math
 import drjit as dr
 import mitsuba as mi
 
-from ..scattering import orennayar as terms_module
-from . import _common
+from ..scattering import orennayar as terms
+from . import lobes, properties
 
 PLUGIN = "orennayar"
 
@@ -19,18 +19,12 @@ PLUGIN = "orennayar"
 #: [0, π/2] (the model's coefficients stay finite beyond, but mean nothing there).
 SIGMA_MAX = math.pi / 2
 
-V = _common.variant_tools()
-# Bound once per variant: in scalar variants these are looked up at every call otherwise.
-Spectrum, Float = mi.Spectrum, mi.Float
-cosine_hemisphere_pdf = mi.warp.square_to_cosine_hemisphere_pdf
-terms = V.terms(terms_module)
-DIFFUSE = _common.flag("DiffuseReflection")
-FLAGS = _common.flag("DiffuseReflection", "FrontSide")
+FLAGS = lobes.flag("DiffuseReflection", "FrontSide")
 
 
 def _sigma(props):
     """σ: a number (-> float) or a texture (-> mi.Texture), finite and within [0, π/2]."""
-    return _common.number_or_texture(props, PLUGIN, "sigma", 0.2, 0.0, SIGMA_MAX, "radians")
+    return properties.number_or_texture(props, PLUGIN, "sigma", 0.2, 0.0, SIGMA_MAX, "radians")
 
 
 class OrenNayar(mi.BSDF):
@@ -98,41 +92,42 @@ class OrenNayar(mi.BSDF):
     def __init__(self, props):
         super().__init__(props)
         #: Facet albedo ρ.
-        self.m_reflectance = _common.reflectance(props, PLUGIN, "reflectance", 0.5)
-        #: σ: a float (a Float in JIT variants, to be updatable) or a texture.
+        self.m_reflectance = properties.reflectance(props, PLUGIN, "reflectance", 0.5)
+        #: σ: a Float (updatable in JIT variants) or a texture.
         sigma = _sigma(props)
         self._textured_sigma = isinstance(sigma, mi.Texture)
-        self.m_sigma = sigma if self._textured_sigma or not V.jit else Float(sigma)
+        self.m_sigma = sigma if self._textured_sigma else mi.Float(sigma)
         #: ``qualitative`` or ``full``
-        self.m_form = _common.choice(props, PLUGIN, "form", "qualitative", terms_module.FORMS)
+        self.m_form = properties.choice(props, PLUGIN, "form", "qualitative", terms.FORMS)
         self.m_flags = FLAGS
         self.m_components = [FLAGS]
 
     def sample(self, ctx, si, sample1, sample2, active=True):
-        bs = V.new_sample()
+        bs = lobes.new_sample()
+        if not ctx.is_enabled(mi.BSDFFlags.DiffuseReflection):
+            return bs, mi.Spectrum(0.0)
         active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
-        if V.none(active) or not ctx.is_enabled(DIFFUSE):
-            return bs, Spectrum(0.0)
+        if lobes.none(active):
+            return bs, mi.Spectrum(0.0)
         # ωo from the cosine-weighted hemisphere, pdf cosθo/π
-        wo, pdf = V.cosine_sample(bs, sample2)
+        wo, pdf = lobes.cosine_sample(bs, sample2)
         # weight = f·cosθo / pdf = ρ·factor (ρ alone at σ = 0, as lambert)
         rho = self.m_reflectance.eval(si, active)
         weight = rho * self._factor(si, si.wi, wo, rho, active)
-        return bs, V.select(active & (pdf > 0), V.depolarize(weight), 0.0)
+        return bs, dr.select(active & (pdf > 0), lobes.depolarize(weight), 0.0)
 
-    eval, pdf, eval_pdf = V.diffuse_methods()
+    eval, pdf = lobes.diffuse_eval, lobes.diffuse_pdf
+    eval_pdf = lobes.diffuse_eval_pdf
 
     def _eval_pdf(self, si, wo, active):
         """(f·cosθo, pdf) at ``wo``, for eval, pdf and eval_pdf."""
-        wo = V.vector(wo)
+        wo = lobes.vector(wo)
         active = active & (si.wi.z > 0) & (wo.z > 0)  # one-sided, like `diffuse`
-        if V.none(active):
-            return Spectrum(0.0), Float(0.0)
         # f·cosθo = (ρ/π·cosθo)·factor, in lambert's order of operations
         rho = self.m_reflectance.eval(si, active)
         value = rho * dr.inv_pi * wo.z * self._factor(si, si.wi, wo, rho, active)
-        pdf = cosine_hemisphere_pdf(wo)
-        return V.select(active, V.depolarize(value), 0.0), V.select(active, pdf, 0.0)
+        pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
+        return lobes.finish(value, pdf, active)
 
     def _factor(self, si, wi, wo, rho, active):
         """f/(ρ/π) at (ωi, ωo): exactly 1 where σ = 0."""
@@ -148,10 +143,10 @@ class OrenNayar(mi.BSDF):
 
     def traverse(self, cb):
         cb.put("reflectance", self.m_reflectance, mi.ParamFlags.Differentiable)
-        if self._textured_sigma or V.jit:  # a Python float cannot be updated
+        if self._textured_sigma or dr.is_jit_v(mi.Float):  # a Python float cannot be updated
             cb.put("sigma", self.m_sigma, mi.ParamFlags.Differentiable)
 
     def to_string(self):
         return (f"OrenNayar[\n  form = {self.m_form},\n"
-                f"  reflectance = {_common.indent(self.m_reflectance)},\n"
-                f"  sigma = {_common.indent(self.m_sigma)}\n]")
+                f"  reflectance = {properties.indent(self.m_reflectance)},\n"
+                f"  sigma = {properties.indent(self.m_sigma)}\n]")

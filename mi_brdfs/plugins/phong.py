@@ -11,8 +11,8 @@ import drjit as dr
 import mitsuba as mi
 
 from ..scattering import mixture
-from ..scattering import phong as lobes
-from . import _common
+from ..scattering import phong as terms
+from . import lobes, properties
 
 PLUGIN = "phong"
 
@@ -32,23 +32,19 @@ AMBIENT_HINT = ("a path tracer has no ambient term: the environment provides it;
 
 def _exponent(props):
     """The exponent: a number (-> float) or a texture (-> mi.Texture), finite and ≥ 0."""
-    return _common.number_or_texture(props, PLUGIN, "exponent", 30.0, 0.0, EXPONENT_MAX)
+    return properties.number_or_texture(props, PLUGIN, "exponent", 30.0, 0.0, EXPONENT_MAX)
 
 
-V = _common.variant_tools()
-# Bound once per variant: in scalar variants these are looked up at every call otherwise.
-Spectrum, Float = mi.Spectrum, mi.Float
-IMPORTANCE = mi.TransportMode.Importance
-GLOSSY = _common.flag("GlossyReflection")
-FRONT, NONSYMMETRIC = _common.flag("FrontSide"), _common.flag("NonSymmetric")
+GLOSSY_FLAGS = lobes.flag("GlossyReflection", "FrontSide")
+NONSYMMETRIC = lobes.flag("NonSymmetric")
 
 
 def constants(form, lobe, n):
     """(n, 1/(n+1), specular factor, pdf factor (n+1)/(2π)) of the lobe, per lane of n."""
     # values set through mi.traverse are not validated: clamp them into the accepted range
     n = dr.clip(n, 0.0, EXPONENT_MAX)
-    return (n, 1.0 / (n + 1.0), lobes.specular_normalization(form, lobe, n),
-            lobes.pdf_normalization(n))
+    return (n, 1.0 / (n + 1.0), terms.specular_normalization(form, lobe, n),
+            terms.pdf_normalization(n))
 
 
 class Phong(mi.BSDF):
@@ -151,71 +147,71 @@ class Phong(mi.BSDF):
 
     def __init__(self, props):
         super().__init__(props)
-        _common.reject(props, PLUGIN, "ambient", AMBIENT_HINT)
+        properties.reject(props, PLUGIN, "ambient", AMBIENT_HINT)
         #: ``normalized``, ``lecture`` or ``original``
-        self.m_form = _common.choice(props, PLUGIN, "form", "normalized", lobes.FORMS)
+        self.m_form = properties.choice(props, PLUGIN, "form", "normalized", terms.FORMS)
         #: ``mirror`` or ``halfway``
-        self.m_lobe = _common.choice(props, PLUGIN, "lobe", "mirror", lobes.LOBES)
+        self.m_lobe = properties.choice(props, PLUGIN, "lobe", "mirror", terms.LOBES)
         #: Diffuse albedo ρd and specular reflectance ks.
-        self.m_diffuse_reflectance = _common.reflectance(props, PLUGIN, "diffuse_reflectance",
-                                                         0.5)
-        self.m_specular_reflectance = _common.reflectance(props, PLUGIN,
-                                                          "specular_reflectance", 0.2)
-        #: Exponent n: a float (a Float in JIT variants, to be updatable) or a texture.
+        self.m_diffuse_reflectance = properties.reflectance(props, PLUGIN,
+                                                            "diffuse_reflectance", 0.5)
+        self.m_specular_reflectance = properties.reflectance(props, PLUGIN,
+                                                             "specular_reflectance", 0.2)
+        #: Exponent n: a Float (updatable in JIT variants) or a texture.
         exponent = _exponent(props)
         self._textured_exponent = isinstance(exponent, mi.Texture)
-        self.m_exponent = (exponent if self._textured_exponent or not V.jit
-                           else Float(exponent))
+        self.m_exponent = exponent if self._textured_exponent else mi.Float(exponent)
         if self.m_form == "normalized":
-            _common.warn_sum(props, PLUGIN,
-                             ("diffuse_reflectance", self.m_diffuse_reflectance),
-                             ("specular_reflectance", self.m_specular_reflectance),
-                             "the normalized form then reflects more light than it receives "
-                             "(its albedo at normal incidence is their sum)")
+            properties.warn_sum(props, PLUGIN,
+                                ("diffuse_reflectance", self.m_diffuse_reflectance),
+                                ("specular_reflectance", self.m_specular_reflectance),
+                                "the normalized form then reflects more light than it receives "
+                                "(its albedo at normal incidence is their sum)")
 
         # Lobes in component order; one whose reflectance is the constant 0 is left out.
-        _common.set_two_lobes(self, self.m_diffuse_reflectance, self.m_specular_reflectance,
-                        GLOSSY | FRONT | (NONSYMMETRIC if self.m_form == "original" else 0))
+        lobes.set_two_lobes(self, self.m_diffuse_reflectance, self.m_specular_reflectance,
+                            GLOSSY_FLAGS | (NONSYMMETRIC if self.m_form == "original" else 0))
         mirror = self.m_lobe == "mirror"
-        self._lobe_value = lobes.mirror_lobe if mirror else lobes.halfway_lobe
-        self._lobe_sample = lobes.sample_mirror if mirror else lobes.sample_halfway
+        self._lobe_value = terms.mirror_lobe if mirror else terms.halfway_lobe
+        self._lobe_sample = terms.sample_mirror if mirror else terms.sample_halfway
         self.parameters_changed([])
 
-    eval, pdf = _common.eval_half, _common.pdf_half
-    _enabled = _common.two_lobes_enabled
-    eval_diffuse_reflectance = _common.two_lobes_diffuse_reflectance
+    eval, pdf = lobes.eval_half, lobes.pdf_half
+    _enabled = lobes.two_lobes_enabled
+    eval_diffuse_reflectance = lobes.two_lobes_diffuse_reflectance
 
     def sample(self, ctx, si, sample1, sample2, active=True):
-        bs, sample2 = V.new_sample(), V.point2(sample2)
-        has_diffuse, has_glossy = self._enabled(ctx)
+        bs, sample2 = lobes.new_sample(), lobes.point2(sample2)
+        enabled = self._enabled(ctx)
+        if not (enabled[0] or enabled[1]):
+            return bs, mi.Spectrum(0.0)
         active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
-        if V.none(active) or not (has_diffuse or has_glossy):
-            return bs, Spectrum(0.0)
-        consts = self._lobe_constants(si, active) if has_glossy else None
+        if lobes.none(active):
+            return bs, mi.Spectrum(0.0)
+        consts = self._lobe_constants(si, active) if enabled[1] else None
 
         # ωo from the glossy lobe (cosⁿ about R, or H about N), or the cosine-weighted hemisphere;
-        # with both lobes on, sample1 picks one with probability p_glossy (V.glossy_or_diffuse)
+        # with both lobes on, sample1 picks one with probability p_glossy
         def glossy():
             return self._lobe_sample(si.wi, sample2, consts[1])
 
-        V.glossy_or_diffuse(bs, sample1, sample2, self._p_glossy, has_diffuse, has_glossy, glossy,
-                            self._glossy, self._diffuse)
+        lobes.glossy_or_diffuse(self, bs, sample1, sample2, self._p_glossy, enabled, glossy)
         # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
-        value, bs.pdf = self._eval_pdf(ctx, si, bs.wo, active, has_diffuse, has_glossy, consts)
-        return bs, V.weight(value, bs.pdf, active)
+        value, bs.pdf = self._eval_pdf(ctx, si, bs.wo, active, enabled, consts)
+        return bs, lobes.weight(value, bs.pdf, active)
 
     def eval_pdf(self, ctx, si, wo, active=True):
-        has_diffuse, has_glossy = self._enabled(ctx)
-        if not (has_diffuse or has_glossy):
-            return Spectrum(0.0), Float(0.0)
-        return self._eval_pdf(ctx, si, V.vector(wo), active, has_diffuse, has_glossy)
+        enabled = self._enabled(ctx)
+        if not (enabled[0] or enabled[1]):
+            return mi.Spectrum(0.0), mi.Float(0.0)
+        return self._eval_pdf(ctx, si, lobes.vector(wo), active, enabled)
 
-    def _eval_pdf(self, ctx, si, wo, active, has_diffuse, has_glossy, consts=None):
-        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the enabled lobes."""
+    def _eval_pdf(self, ctx, si, wo, active, enabled, consts=None):
+        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the ``enabled`` lobes
+        (diffuse, glossy)."""
+        has_diffuse, has_glossy = enabled
         cos_theta_i, cos_theta_o = si.wi.z, wo.z
         active = active & (cos_theta_i > 0) & (cos_theta_o > 0)  # one-sided, like `diffuse`
-        if V.none(active):
-            return Spectrum(0.0), Float(0.0)
         if has_diffuse:
             # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
             pdf = dr.inv_pi * cos_theta_o
@@ -230,13 +226,13 @@ class Phong(mi.BSDF):
                 value, pdf = value + value_s, mixture.pdf(self._p_glossy, pdf_s, pdf)
             else:
                 value, pdf = value_s, pdf_s
-        return V.select(active, V.depolarize(value), 0.0), V.select(active, pdf, 0.0)
+        return lobes.finish(value, pdf, active)
 
     def _projection(self, ctx, cos_theta_i, cos_theta_o):
         """cosθo, divided by N·L in the ``original`` form (L: the light's side)."""
         if self.m_form != "original":
             return cos_theta_o
-        if ctx.mode == IMPORTANCE:  # L = ωi, floored where the model diverges
+        if ctx.mode == mi.TransportMode.Importance:  # L = ωi, floored where f diverges
             return cos_theta_o / dr.maximum(cos_theta_i, COS_LIGHT_MIN)
         return 1.0  # radiance: L = ωo, so cosθo / (N·L) = 1
 
@@ -255,11 +251,11 @@ class Phong(mi.BSDF):
         # Lobe choice by albedo weights, from the textures' means (as Mitsuba's roughplastic and
         # Mitsuba 0.6's phong): constant per BSDF, so nothing to evaluate per call.
         w_d = dr.detach(self.m_diffuse_reflectance.mean())
-        w_s = dr.detach(self.m_specular_reflectance.mean()) * lobes.specular_albedo(
+        w_s = dr.detach(self.m_specular_reflectance.mean()) * terms.specular_albedo(
             self.m_form, self.m_lobe, n_mean)
-        self._p_glossy = Float(mixture.probability(w_s, w_d))
-        if V.jit:
-            dr.make_opaque(self._p_glossy, *([] if self._textured_exponent else self._constants))
+        self._p_glossy = mi.Float(mixture.probability(w_s, w_d))
+        # opaque: a changed parameter updates the kernel's inputs instead of recompiling it
+        dr.make_opaque(self._p_glossy, *([] if self._textured_exponent else self._constants))
 
     def traverse(self, cb):
         # Only the parameters of lobes that exist: the lobe structure is fixed at load time.
@@ -269,11 +265,11 @@ class Phong(mi.BSDF):
         if self._glossy is not None:
             cb.put("specular_reflectance", self.m_specular_reflectance,
                    mi.ParamFlags.Differentiable)
-            if self._textured_exponent or V.jit:  # a Python float cannot be updated
+            if self._textured_exponent or dr.is_jit_v(mi.Float):  # a float cannot be updated
                 cb.put("exponent", self.m_exponent, mi.ParamFlags.Differentiable)
 
     def to_string(self):
         return (f"Phong[\n  form = {self.m_form},\n  lobe = {self.m_lobe},\n"
-                f"  diffuse_reflectance = {_common.indent(self.m_diffuse_reflectance)},\n"
-                f"  specular_reflectance = {_common.indent(self.m_specular_reflectance)},\n"
-                f"  exponent = {_common.indent(self.m_exponent)}\n]")
+                f"  diffuse_reflectance = {properties.indent(self.m_diffuse_reflectance)},\n"
+                f"  specular_reflectance = {properties.indent(self.m_specular_reflectance)},\n"
+                f"  exponent = {properties.indent(self.m_exponent)}\n]")

@@ -9,18 +9,14 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from ..scattering import microfacet, mixture, vector
-from ..scattering import ward as lobe_terms
-from . import _common
+from ..scattering import mixture, vector
+from ..scattering import ward as terms
+from . import lobes, properties
 
 PLUGIN = "ward"
 
-V = _common.variant_tools()
-# Bound once per variant: in scalar variants these are looked up at every call otherwise.
-Spectrum, Float = mi.Spectrum, mi.Float
-mf, vec, terms = V.terms(microfacet), V.terms(vector), V.terms(lobe_terms)
-GLOSSY = _common.flag("GlossyReflection")
-FRONT, ANISOTROPIC = _common.flag("FrontSide"), _common.flag("Anisotropic")
+GLOSSY_FLAGS = lobes.flag("GlossyReflection", "FrontSide")
+ANISOTROPIC = lobes.flag("Anisotropic")
 DIFFERENTIABLE = mi.ParamFlags.Differentiable
 DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
 
@@ -105,95 +101,89 @@ class Ward(mi.BSDF):
     def __init__(self, props):
         super().__init__(props)
         #: Lobe width along the tangent and the bitangent: the same texture when isotropic.
-        self.m_alpha_u, self.m_alpha_v = _common.roughness(props, PLUGIN)
+        self.m_alpha_u, self.m_alpha_v = properties.roughness(props, PLUGIN)
         self.m_anisotropic = self.m_alpha_u is not self.m_alpha_v
         #: ``original``, ``duer`` or ``balanced``
-        self.m_form = _common.choice(props, PLUGIN, "form", "balanced", lobe_terms.FORMS)
-        self.m_specular_reflectance = _common.reflectance(props, PLUGIN,
-                                                          "specular_reflectance", 0.2)
-        self.m_diffuse_reflectance = _common.reflectance(props, PLUGIN, "diffuse_reflectance",
-                                                         0.5)
-        _common.warn_sum(props, PLUGIN, ("diffuse_reflectance", self.m_diffuse_reflectance),
-                         ("specular_reflectance", self.m_specular_reflectance),
-                         "the lobes' albedos then add up to more than 1 at normal incidence")
+        self.m_form = properties.choice(props, PLUGIN, "form", "balanced", terms.FORMS)
+        self.m_specular_reflectance = properties.reflectance(props, PLUGIN,
+                                                             "specular_reflectance", 0.2)
+        self.m_diffuse_reflectance = properties.reflectance(props, PLUGIN,
+                                                            "diffuse_reflectance", 0.5)
+        properties.warn_sum(props, PLUGIN, ("diffuse_reflectance", self.m_diffuse_reflectance),
+                            ("specular_reflectance", self.m_specular_reflectance),
+                            "the lobes' albedos then add up to more than 1 at normal incidence")
         # Lobes in component order; one whose reflectance is the constant 0 is left out.
-        _common.set_two_lobes(self, self.m_diffuse_reflectance, self.m_specular_reflectance,
-                        GLOSSY | FRONT | (ANISOTROPIC if self.m_anisotropic else 0))
+        lobes.set_two_lobes(self, self.m_diffuse_reflectance, self.m_specular_reflectance,
+                            GLOSSY_FLAGS | (ANISOTROPIC if self.m_anisotropic else 0))
         self.parameters_changed()
 
-    eval, pdf = _common.eval_half, _common.pdf_half
-    _enabled = _common.two_lobes_enabled
-    eval_diffuse_reflectance = _common.two_lobes_diffuse_reflectance
+    eval, pdf = lobes.eval_half, lobes.pdf_half
+    _enabled = lobes.two_lobes_enabled
+    eval_diffuse_reflectance = lobes.two_lobes_diffuse_reflectance
 
     def sample(self, ctx, si, sample1, sample2, active=True):
-        bs, sample2 = V.new_sample(), V.point2(sample2)
-        has_diffuse, has_glossy = self._enabled(ctx)
-        wi = V.direction(si.wi)
+        bs, sample2 = lobes.new_sample(), lobes.point2(sample2)
+        enabled = self._enabled(ctx)
+        if not (enabled[0] or enabled[1]):
+            return bs, mi.Spectrum(0.0)
+        wi = si.wi
         active = active & (wi.z > 0)  # one-sided: the local frame's z is cosθ
-        if V.none(active) or not (has_diffuse or has_glossy):
-            return bs, Spectrum(0.0)
-        alpha = self._alpha(si, active) if has_glossy else None
+        if lobes.none(active):
+            return bs, mi.Spectrum(0.0)
+        distr = self._distribution(si, active) if enabled[1] else None
 
         # ωo: ωi reflected about a half vector of the Gaussian lobe, or the cosine-weighted
         # hemisphere; with both lobes on, sample1 picks one with probability p_glossy
-        # (V.glossy_or_diffuse)
         def glossy():
-            return vec.reflect(wi, terms.sample(alpha, sample2))
+            return vector.reflect(wi, terms.sample(distr, sample2))
 
-        V.glossy_or_diffuse(bs, sample1, sample2, self._p_glossy, has_diffuse, has_glossy, glossy,
-                            self._glossy, self._diffuse)
+        lobes.glossy_or_diffuse(self, bs, sample1, sample2, self._p_glossy, enabled, glossy)
         # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
-        value, bs.pdf = self._eval_pdf(si, wi, V.direction(bs.wo), active, has_diffuse,
-                                       has_glossy, alpha)
-        return bs, V.weight(value, bs.pdf, active)
+        value, bs.pdf = self._eval_pdf(si, wi, bs.wo, active, enabled, distr)
+        return bs, lobes.weight(value, bs.pdf, active)
 
     def eval_pdf(self, ctx, si, wo, active=True):
-        has_diffuse, has_glossy = self._enabled(ctx)
-        if not (has_diffuse or has_glossy):
-            return Spectrum(0.0), Float(0.0)
-        return self._eval_pdf(si, V.direction(si.wi), V.direction(wo), active, has_diffuse,
-                              has_glossy)
+        enabled = self._enabled(ctx)
+        if not (enabled[0] or enabled[1]):
+            return mi.Spectrum(0.0), mi.Float(0.0)
+        return self._eval_pdf(si, si.wi, lobes.vector(wo), active, enabled)
 
-    def _eval_pdf(self, si, wi, wo, active, has_diffuse, has_glossy, alpha=None):
-        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the enabled lobes."""
+    def _eval_pdf(self, si, wi, wo, active, enabled, distr=None):
+        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the ``enabled`` lobes
+        (diffuse, glossy)."""
+        has_diffuse, has_glossy = enabled
         active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
-        if V.none(active):
-            return Spectrum(0.0), Float(0.0)
         if has_diffuse:
             # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
             pdf = dr.inv_pi * wo.z
             value = self.m_diffuse_reflectance.eval(si, active) * pdf
         if has_glossy:
             # ρs·S·cosθo, and the density of the reflected half vector
-            alpha = self._alpha(si, active) if alpha is None else alpha
-            h = vec.half_vector(wi, wo)
-            d = mf.ndf(mf.BECKMANN, alpha, h)
+            distr = distr or self._distribution(si, active)
+            h = vector.half_vector(wi, wo)
+            d = distr.ndf(h)
             value_s = self.m_specular_reflectance.eval(si, active) * (
-                terms.specular(self.m_form, alpha, wi, wo, h, d) * wo.z)
+                terms.specular(self.m_form, distr, wi, wo, h, d) * wo.z)
             pdf_s = terms.pdf(wo, h, d)
             if has_diffuse:  # both lobes: their sum, and the mixture of both strategies
                 value, pdf = value + value_s, mixture.pdf(self._p_glossy, pdf_s, pdf)
             else:
                 value, pdf = value_s, pdf_s
-        return V.select(active, V.depolarize(value), 0.0), V.select(active, pdf, 0.0)
+        return lobes.finish(value, pdf, active)
 
-    def _alpha(self, si, active):
-        """α at ``si`` (the pair (αu, αv) when anisotropic), clamped to 10⁻⁴."""
-        if self._alpha_const is not None:
-            return self._alpha_const
-        return _common.alpha_at(self.m_alpha_u, self.m_alpha_v, si, active)
+    def _distribution(self, si, active):
+        """The lobe's Beckmann distribution at ``si``, α clamped to 10⁻⁴."""
+        return terms.distribution(*properties.roughness_at(self.m_alpha_u, self.m_alpha_v, si,
+                                                           active))
 
     def parameters_changed(self, keys=()):
-        """The lobe choice probability; in scalar variants a constant α, read once."""
+        """The lobe choice probability."""
         # Lobe choice by the reflectances' means (as Mitsuba 0.6's ward): constant per BSDF.
-        self._p_glossy = Float(mixture.probability(
+        self._p_glossy = mi.Float(mixture.probability(
             dr.detach(self.m_specular_reflectance.mean()),
             dr.detach(self.m_diffuse_reflectance.mean())))
-        self._alpha_const = None
-        if V.jit:
-            dr.make_opaque(self._p_glossy)
-            return
-        self._alpha_const = _common.constant_alpha(self.m_alpha_u, self.m_alpha_v)
+        # opaque: a changed parameter updates the kernel's inputs instead of recompiling it
+        dr.make_opaque(self._p_glossy)
 
     def traverse(self, cb):
         # Only the parameters of lobes that exist: the lobe structure is fixed at load time.
@@ -209,10 +199,10 @@ class Ward(mi.BSDF):
 
     def to_string(self):
         if self.m_anisotropic:
-            alpha = (f"  alpha_u = {_common.indent(self.m_alpha_u)},\n"
-                     f"  alpha_v = {_common.indent(self.m_alpha_v)},\n")
+            alpha = (f"  alpha_u = {properties.indent(self.m_alpha_u)},\n"
+                     f"  alpha_v = {properties.indent(self.m_alpha_v)},\n")
         else:
-            alpha = f"  alpha = {_common.indent(self.m_alpha_u)},\n"
+            alpha = f"  alpha = {properties.indent(self.m_alpha_u)},\n"
         return (f"Ward[\n  form = {self.m_form},\n{alpha}"
-                f"  specular_reflectance = {_common.indent(self.m_specular_reflectance)},\n"
-                f"  diffuse_reflectance = {_common.indent(self.m_diffuse_reflectance)}\n]")
+                f"  specular_reflectance = {properties.indent(self.m_specular_reflectance)},\n"
+                f"  diffuse_reflectance = {properties.indent(self.m_diffuse_reflectance)}\n]")

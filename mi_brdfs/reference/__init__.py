@@ -96,7 +96,7 @@ def _rough_dielectric(spec):
     The reference of a ``roughdielectric`` dict or a ``cooktorrance`` one with
     ``transmission`` (named media take Mitsuba's values); None for textures.
     """
-    from ..plugins.materials import dielectric_ior
+    from ..materials import dielectric_ior
     alpha = (spec.get("alpha_u"), spec.get("alpha_v")) if "alpha_u" in spec \
         else spec.get("alpha", 0.1)
     numbers = alpha if isinstance(alpha, tuple) else (alpha,)

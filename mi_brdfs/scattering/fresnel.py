@@ -34,32 +34,12 @@ _TINY = 1e-30
 
 def exact(cos_theta_i, eta, k):
     """Unpolarised Fresnel reflectance at incidence cosθi ∈ [0, 1], exact, per channel."""
-    c, c2, s2 = incidence(cos_theta_i)
-    e2k2, ek4 = exact_constants(eta, k)
-    return exact_at(c, c2, s2, e2k2, ek4)
-
-
-def incidence(cos_theta_i):
-    """(c, c², sin²θ) of cosθi clamped to [0, 1]: the part of :func:`exact` that depends on
-    the direction only (the same for every channel)."""
     c = dr.minimum(dr.maximum(cos_theta_i, 0.0), 1.0)
     c2 = c * c
-    return c, c2, 1.0 - c2
-
-
-def exact_constants(eta, k):
-    """(η² − k², 4η²k²): the part of :func:`exact` that depends on the material only."""
+    s2 = 1.0 - c2
     ek = eta * k
-    return eta * eta - k * k, 4.0 * ek * ek
-
-
-def exact_at(c, c2, s2, e2k2, ek4):
-    """:func:`exact` from its parts, (c, c², sin²θ) of :func:`incidence` and (η² − k², 4η²k²)
-    of :func:`exact_constants`: a renderer that keeps constant η, k per channel computes the
-    constants once and the incidence once per direction (the same operations, in the same
-    order, as :func:`exact`)."""
-    t0 = e2k2 - s2
-    ab = dr.sqrt(t0 * t0 + ek4)  # a² + b²
+    t0 = eta * eta - k * k - s2
+    ab = dr.sqrt(t0 * t0 + 4.0 * ek * ek)  # a² + b²
     a = dr.sqrt(dr.maximum(0.5 * (ab + t0), 0.0))
     b2 = dr.maximum(0.5 * (ab - t0), 0.0)
     am, ap = a - c, a + c
@@ -79,20 +59,10 @@ def r0(eta, k):
 
 def schlick(cos_theta_i, eta, k):
     """Schlick's approximation R0 + (1 − R0)(1 − cosθi)⁵, with R0 from η and k."""
-    return schlick_at(schlick_incidence(cos_theta_i), r0(eta, k))
-
-
-def schlick_incidence(cos_theta_i):
-    """(1 − cosθi)⁵, cosθi clamped to [0, 1]: the direction's part of :func:`schlick`."""
     x = 1.0 - dr.minimum(dr.maximum(cos_theta_i, 0.0), 1.0)
     x2 = x * x
-    return x2 * x2 * x
-
-
-def schlick_at(inc, const):
-    """:func:`schlick` from its parts, ``inc`` of :func:`schlick_incidence` and ``const`` of
-    :func:`r0`, the material's part (as :func:`exact_at`)."""
-    return const + (1.0 - const) * inc
+    f0 = r0(eta, k)
+    return f0 + (1.0 - f0) * (x2 * x2 * x)
 
 
 def dielectric(cos_theta_i, eta):

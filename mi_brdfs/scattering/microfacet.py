@@ -28,16 +28,15 @@ and 86). Mitsuba 3 replaces the Beckmann G1 by Walter's rational approximation (
 The V-cavity masking (Cook & Torrance 1982; Heitz 2014 §4.2) is
 G1(v, m) = min(1, 2 (n·m)(n·v) / (v·m)) and G = min(G1(ωi), G1(ωo)).
 
-**Anisotropy.** α may be a pair (αu, αv), the roughness along the local frame's x and y axes
-(the surface's tangent and bitangent). Then tan²θm/α² becomes (mx²/αu² + my²/αv²)/mz², πα²
+**Anisotropy.** A :class:`Distribution` has the roughness αu, αv along the local frame's x
+and y axes (the surface's tangent and bitangent). Then tan²θm/α² becomes (mx²/αu² + my²/αv²)/mz², πα²
 becomes π αu αv, and α² tan²θv in Λ becomes ((αu vx)² + (αv vy)²)/vz² (Heitz 2014,
 "Understanding the Masking-Shadowing Function", on anisotropic distributions: the anisotropic
-slope distribution is the isotropic one of unit roughness, stretched by αu and αv). A plain α
-(a number or ``Float``) is the isotropic case; D and Λ compute it with the same operations as
-the pair (α, α).
+slope distribution is the isotropic one of unit roughness, stretched by αu and αv); αu = αv
+is the isotropic case.
 
-All functions take ``kind`` ('beckmann' or 'ggx') as a plain string (configuration, not data)
-and α already clamped to :data:`ALPHA_MIN`.
+The terms that do not depend on the distribution (the V-cavity masking, the densities and the
+Jacobians) are plain functions.
 """
 
 from __future__ import annotations
@@ -45,7 +44,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .vector import dot, mitsuba_vector, terms_vector
+from .vector import dot
 
 BECKMANN, GGX = "beckmann", "ggx"
 DISTRIBUTIONS = (BECKMANN, GGX)
@@ -72,67 +71,150 @@ def mitsuba_type(kind: str):
     return {BECKMANN: mi.MicrofacetType.Beckmann, GGX: mi.MicrofacetType.GGX}[kind]
 
 
-def ndf(kind: str, alpha, m):
-    """D(m), per unit solid angle of microfacet normals; 0 below the horizon."""
-    au, av = alpha if type(alpha) is tuple else (alpha, alpha)
-    cos2 = dr.square(m.z)
-    # sin²θm/α² from the x, y components: exact near the normal, where 1 - cos²θ cancels
-    slope2 = dr.square(m.x / au) + dr.square(m.y / av)
-    if kind == BECKMANN:
-        d = dr.exp(-slope2 / dr.maximum(cos2, _TINY)) / \
-            dr.maximum(dr.pi * (au * av) * dr.square(cos2), _TINY)
-    else:
-        d = 1.0 / dr.maximum(dr.pi * (au * av) * dr.square(slope2 + cos2), _TINY)
-    return dr.select(d * m.z > D_COS_MIN, d, 0.0)
+class Distribution:
+    """
+    A microfacet distribution: Beckmann or GGX (``kind``), with roughness ``alpha_u`` along the
+    local x axis and ``alpha_v`` along y (``alpha_v`` None: isotropic, α = ``alpha_u``), both
+    already clamped to :data:`ALPHA_MIN`. Its methods are D, Smith's Λ and G1 (exact, and as
+    Mitsuba computes G1) and the samplers of microfacet normals (D·cosθ, visible normals of
+    Smith's and of the V-cavity's masking). The isotropic case computes D and Λ with the same
+    operations as the pair (α, α); only the D·cosθ sampler has a form of its own for it.
+    """
 
+    def __init__(self, kind: str, alpha_u, alpha_v=None):
+        self.kind = kind
+        self.anisotropic = alpha_v is not None
+        self.alpha_u = alpha_u
+        self.alpha_v = alpha_v if self.anisotropic else alpha_u
 
-def _tan2_alpha2(alpha, v):
-    """(α² sin²θv, α² tan²θv) of a unit vector ``v``, with α projected on its azimuth."""
-    au, av = alpha if type(alpha) is tuple else (alpha, alpha)
-    xy = dr.square(au * v.x) + dr.square(av * v.y)
-    return xy, xy / dr.maximum(dr.square(v.z), _TINY)
+    def scaled(self, factor) -> "Distribution":
+        """The distribution with both roughnesses multiplied by ``factor`` (Walter's widening)."""
+        return Distribution(self.kind, self.alpha_u * factor,
+                            self.alpha_v * factor if self.anisotropic else None)
+
+    def ndf(self, m):
+        """D(m), per unit solid angle of microfacet normals; 0 below the horizon."""
+        au, av = self.alpha_u, self.alpha_v
+        cos2 = dr.square(m.z)
+        # sin²θm/α² from the x, y components: exact near the normal, where 1 - cos²θ cancels
+        slope2 = dr.square(m.x / au) + dr.square(m.y / av)
+        if self.kind == BECKMANN:
+            d = dr.exp(-slope2 / dr.maximum(cos2, _TINY)) / \
+                dr.maximum(dr.pi * (au * av) * dr.square(cos2), _TINY)
+        else:
+            d = 1.0 / dr.maximum(dr.pi * (au * av) * dr.square(slope2 + cos2), _TINY)
+        return dr.select(d * m.z > D_COS_MIN, d, 0.0)
+
+    def _tan2_alpha2(self, v):
+        """(α² sin²θv, α² tan²θv) of a unit vector ``v``, with α projected on its azimuth."""
+        xy = dr.square(self.alpha_u * v.x) + dr.square(self.alpha_v * v.y)
+        return xy, xy / dr.maximum(dr.square(v.z), _TINY)
+
+    def smith_lambda(self, v):
+        """Smith's Λ(v), exact (Beckmann with erf); 0 at normal incidence."""
+        _, t2 = self._tan2_alpha2(v)
+        if self.kind == BECKMANN:
+            a = dr.rsqrt(t2)  # 1/(α tanθ): +inf at normal incidence, where Λ = 0 exactly
+            # e^{-a²}/a: a = inf gives 0/inf = 0; the floor only keeps a = 0 (tangent) finite
+            return 0.5 * (dr.erf(a) - 1.0) + \
+                0.5 * _INV_SQRT_PI * dr.exp(-dr.square(a)) / dr.maximum(a, _TINY)
+        return 0.5 * (dr.sqrt(1.0 + t2) - 1.0)
+
+    def smith_g1(self, v, m):
+        """Smith's masking G1(v, m) = χ⁺ / (1 + Λ(v)), exact for both distributions."""
+        return _facing(1.0 / (1.0 + self.smith_lambda(v)), v, dot(v, m))
+
+    def smith_g1_mitsuba(self, v, m, vm=None):
+        """
+        G1(v, m) as Mitsuba 3 computes it: for Beckmann Walter's rational approximation
+        (3.535a + 2.181a²)/(1 + 2.276a + 2.577a²), 1 for a ≥ 1.6 (< 0.35 % error); for GGX
+        the exact form, as :meth:`smith_g1`. ``vm``: v·m where the caller has it.
+        """
+        xy, t2 = self._tan2_alpha2(v)
+        if self.kind == BECKMANN:
+            a = dr.rsqrt(t2)
+            a2 = dr.square(a)
+            g1 = dr.select(a >= 1.6, 1.0,
+                           (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2))
+        else:
+            g1 = 2.0 / (1.0 + dr.sqrt(1.0 + t2))
+        g1 = dr.select(xy == 0, 1.0, g1)
+        if vm is None:  # (None or a value: configuration, not data)
+            vm = dot(v, m)
+        return _facing(g1, v, vm)
+
+    def sample(self, u):
+        """
+        A microfacet normal with density D(m) cosθm (:func:`pdf_ndf`) from ``u`` in [0, 1)²
+        (Walter eqs. 28 and 35): tan²θm = −α² ln(1 − u₁) (Beckmann) or α² u₁/(1 − u₁) (GGX),
+        φm = 2π u₂. Anisotropic: the slope (cos 2πu₂, sin 2πu₂)·r of unit roughness,
+        r² = −ln(1 − u₁) or u₁/(1 − u₁), is stretched to (αu cos 2πu₂, αv sin 2πu₂)·r (Heitz
+        2014), so φm follows the stretched slope and α² in tan²θm is αu² cos²2πu₂ + αv²
+        sin²2πu₂.
+
+        sinθm is taken from tan²θm, not as sqrt(1 − cos²θm): in float32 the latter rounds to
+        0 for α ≲ 1e-3 (cosθm rounds to 1 for a large share of the samples), which would put
+        every such sample on the mirror direction; tan²θm keeps them apart down to α = 1e-4.
+        """
+        sin_phi, cos_phi = dr.sincos(dr.two_pi * u.y)
+        if self.anisotropic:
+            sx, sy = self.alpha_u * cos_phi, self.alpha_v * sin_phi  # the stretched slope
+            a2 = dr.fma(sx, sx, sy * sy)
+            inv = dr.rsqrt(a2)
+            cos_phi, sin_phi = sx * inv, sy * inv
+        else:
+            a2 = self.alpha_u * self.alpha_u
+        if self.kind == BECKMANN:
+            tan2 = -a2 * dr.log(1.0 - u.x)
+        else:  # u₁ < 1, but the floor keeps a scalar variant from dividing by 0 at u₁ = 1
+            tan2 = a2 * u.x / dr.maximum(1.0 - u.x, _TINY)
+        cos_theta = dr.rsqrt(1.0 + tan2)
+        sin_theta = dr.sqrt(tan2) * cos_theta
+        return mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta)
+
+    def mitsuba(self):
+        """Mitsuba's ``MicrofacetDistribution`` of the same kind and α, sampling visible
+        normals."""
+        return mi.MicrofacetDistribution(mitsuba_type(self.kind), self.alpha_u, self.alpha_v,
+                                         True)
+
+    def sample_visible(self, wi, u):
+        """
+        A microfacet normal from the distribution of visible normals of ``wi``, density
+        :func:`pdf_visible` with the exact :meth:`smith_g1` (Heitz & d'Eon 2014). This is
+        Mitsuba's own exact sampler (Jakob's numerical inversion for Beckmann, Heitz 2018 for
+        GGX), the one ``roughconductor`` uses.
+        """
+        m, _ = self.mitsuba().sample(wi, u)
+        return m
+
+    def sample_vcavity_visible(self, wi, u, u_facet):
+        r"""
+        A microfacet normal from the distribution of visible normals of ``wi`` under V-cavity
+        masking, density :func:`pdf_visible` with :func:`vcavity_g1` (Heitz & d'Eon 2014, §5):
+        draw m with density D(m) cosθm (:meth:`sample`, from ``u``); m and its mirror image
+        m' = (−mx, −my, mz) are the two facets of one V-groove; pick m' with probability
+        ⟨ωi·m'⟩ / (⟨ωi·m⟩ + ⟨ωi·m'⟩) (⟨⟩ clamps at 0), decided by ``u_facet`` in [0, 1).
+
+        Why that density: m is reached from m (kept) and from m' (flipped), each drawn with
+        D(m) cosθm, so p(m) = 2 D(m) cosθm ⟨ωi·m⟩ / (⟨ωi·m⟩ + ⟨ωi·m'⟩). Where both facets face
+        ωi the denominator is ωi·m + ωi·m' = 2 cosθm cosθi and p(m) = D(m) (ωi·m) / cosθi
+        (G1 = 1); where m' faces away, p(m) = 2 D(m) cosθm = D(m) (ωi·m) G1(ωi, m) / cosθi
+        with G1 = 2 cosθm cosθi / (ωi·m) < 1. The sample weight of the V-cavity lobe is then
+        F·G/G1(ωi) ≤ F, where the Smith visible normals leave it G_V-cavity/G1_Smith.
+        """
+        m = self.sample(u)
+        kept = dot(wi, m)
+        flipped = 2.0 * wi.z * m.z - kept  # ωi·m'
+        kept_p, flipped_p = dr.maximum(kept, 0.0), dr.maximum(flipped, 0.0)
+        flip = u_facet * dr.maximum(kept_p + flipped_p, _TINY) < flipped_p
+        return mi.Vector3f(dr.select(flip, -m.x, m.x), dr.select(flip, -m.y, m.y), m.z)
 
 
 def _facing(g1, v, vm):
     """χ⁺: a microfacet is seen only from its front (``vm`` = v·m), and only from the side of
     the surface."""
     return dr.select(vm * v.z > 0, g1, 0.0)
-
-
-def smith_lambda(kind: str, alpha, v):
-    """Smith's Λ(v), exact (Beckmann with erf); 0 at normal incidence."""
-    _, t2 = _tan2_alpha2(alpha, v)
-    if kind == BECKMANN:
-        a = dr.rsqrt(t2)  # 1/(α tanθ): +inf at normal incidence, where Λ = 0 exactly
-        # e^{-a²}/a: a = inf gives 0/inf = 0; the floor only keeps a = 0 (tangent) finite
-        return 0.5 * (dr.erf(a) - 1.0) + \
-            0.5 * _INV_SQRT_PI * dr.exp(-dr.square(a)) / dr.maximum(a, _TINY)
-    return 0.5 * (dr.sqrt(1.0 + t2) - 1.0)
-
-
-def smith_g1(kind: str, alpha, v, m):
-    """Smith's masking G1(v, m) = χ⁺ / (1 + Λ(v)), exact for both distributions."""
-    return _facing(1.0 / (1.0 + smith_lambda(kind, alpha, v)), v, dot(v, m))
-
-
-def smith_g1_mitsuba(kind: str, alpha, v, m, vm=None):
-    """
-    G1(v, m) as Mitsuba 3 computes it: for Beckmann Walter's rational approximation
-    (3.535a + 2.181a²)/(1 + 2.276a + 2.577a²), 1 for a ≥ 1.6 (< 0.35 % error); for GGX the
-    exact form, as :func:`smith_g1`. ``vm``: v·m where the caller has it.
-    """
-    xy, t2 = _tan2_alpha2(alpha, v)
-    if kind == BECKMANN:
-        a = dr.rsqrt(t2)
-        a2 = dr.square(a)
-        g1 = dr.select(a >= 1.6, 1.0,
-                       (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2))
-    else:
-        g1 = 2.0 / (1.0 + dr.sqrt(1.0 + t2))
-    g1 = dr.select(xy == 0, 1.0, g1)
-    if vm is None:  # (None or a value: configuration, not data)
-        vm = dot(v, m)
-    return _facing(g1, v, vm)
 
 
 def vcavity_g1(v, m):
@@ -150,81 +232,11 @@ def vcavity_g(wi, wo, m):
     Cook & Torrance's masking-shadowing G = min(1, 2(N·H)(N·V)/(V·H), 2(N·H)(N·L)/(V·H)) for the
     reflection half-vector ``m``, i.e. min(G1(ωi), G1(ωo)) of :func:`vcavity_g1`. V·H = L·H
     there; their mean stands for both, which keeps G symmetric in ωi, ωo to the last bit (with
-    ωi·m alone, float32 rounding broke reciprocity by 4e-4 at grazing angles).
+    ωi·m alone, float32 rounding breaks reciprocity at grazing angles).
     """
     vm = 0.5 * (dot(wi, m) + dot(wo, m))
     g = dr.minimum(1.0, 2.0 * m.z * dr.minimum(wi.z, wo.z) / dr.maximum(vm, _TINY))
     return dr.select((vm > 0) & (wi.z > 0) & (wo.z > 0), g, 0.0)
-
-
-def sample_ndf(kind: str, alpha, u):
-    """
-    A microfacet normal with density D(m) cosθm (:func:`pdf_ndf`) from ``u`` in [0, 1)²
-    (Walter eqs. 28 and 35): tan²θm = −α² ln(1 − u₁) (Beckmann) or α² u₁/(1 − u₁) (GGX),
-    φm = 2π u₂. Anisotropic (α a pair): the slope (cos 2πu₂, sin 2πu₂)·r of unit roughness,
-    r² = −ln(1 − u₁) or u₁/(1 − u₁), is stretched to (αu cos 2πu₂, αv sin 2πu₂)·r (Heitz
-    2014), so φm follows the stretched slope and α² in tan²θm is αu² cos²2πu₂ + αv² sin²2πu₂.
-
-    sinθm is taken from tan²θm, not as sqrt(1 − cos²θm): in float32 the latter rounds to 0 for
-    α ≲ 1e-3 (cosθm rounds to 1 for 16 % of the samples at α = 1e-3, all at 1e-4), which would
-    put every such sample on the mirror direction; tan²θm keeps them apart down to α = 1e-4.
-    """
-    sin_phi, cos_phi = dr.sincos(dr.two_pi * u.y)
-    if type(alpha) is tuple:
-        sx, sy = alpha[0] * cos_phi, alpha[1] * sin_phi  # the stretched slope direction
-        a2 = dr.fma(sx, sx, sy * sy)
-        inv = dr.rsqrt(a2)
-        cos_phi, sin_phi = sx * inv, sy * inv
-    else:
-        a2 = alpha * alpha
-    if kind == BECKMANN:
-        tan2 = -a2 * dr.log(1.0 - u.x)
-    else:  # u₁ < 1, but the floor keeps a scalar variant from dividing by 0 at u₁ = 1
-        tan2 = a2 * u.x / dr.maximum(1.0 - u.x, _TINY)
-    cos_theta = dr.rsqrt(1.0 + tan2)
-    sin_theta = dr.sqrt(tan2) * cos_theta
-    return mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta)
-
-
-def distribution(kind: str, alpha):
-    """Mitsuba's ``MicrofacetDistribution`` of ``kind`` and α (or (αu, αv)), with visible-normal
-    sampling."""
-    au, av = alpha if type(alpha) is tuple else (alpha, alpha)
-    return mi.MicrofacetDistribution(mitsuba_type(kind), au, av, True)
-
-
-def sample_visible(kind: str, alpha, wi, u, distr=None):
-    """
-    A microfacet normal from the distribution of visible normals of ``wi``, density
-    :func:`pdf_visible` with the exact :func:`smith_g1` (Heitz & d'Eon 2014). This is Mitsuba's
-    own exact sampler (Jakob's numerical inversion for Beckmann, Heitz 2018 for GGX), the one
-    ``roughconductor`` uses; ``distr`` is :func:`distribution` (kind, α) when it is at hand.
-    """
-    m, _ = (distr or distribution(kind, alpha)).sample(mitsuba_vector(wi), u)
-    return terms_vector(m)
-
-
-def sample_vcavity_visible(kind: str, alpha, wi, u, u_facet):
-    r"""
-    A microfacet normal from the distribution of visible normals of ``wi`` under V-cavity
-    masking, density :func:`pdf_visible` with :func:`vcavity_g1` (Heitz & d'Eon 2014, §5):
-    draw m with density D(m) cosθm (:func:`sample_ndf`, from ``u``); m and its mirror image
-    m' = (−mx, −my, mz) are the two facets of one V-groove; pick m' with probability
-    ⟨ωi·m'⟩ / (⟨ωi·m⟩ + ⟨ωi·m'⟩) (⟨⟩ clamps at 0), decided by ``u_facet`` in [0, 1).
-
-    Why that density: m is reached from m (kept) and from m' (flipped), each drawn with
-    D(m) cosθm, so p(m) = 2 D(m) cosθm ⟨ωi·m⟩ / (⟨ωi·m⟩ + ⟨ωi·m'⟩). Where both facets face
-    ωi the denominator is ωi·m + ωi·m' = 2 cosθm cosθi and p(m) = D(m) (ωi·m) / cosθi
-    (G1 = 1); where m' faces away, p(m) = 2 D(m) cosθm = D(m) (ωi·m) G1(ωi, m) / cosθi with
-    G1 = 2 cosθm cosθi / (ωi·m) < 1. The sample weight of the V-cavity lobe is then
-    F·G/G1(ωi) ≤ F, where the Smith visible normals leave it G_V-cavity/G1_Smith.
-    """
-    m = sample_ndf(kind, alpha, u)
-    kept = dot(wi, m)
-    flipped = 2.0 * wi.z * m.z - kept  # ωi·m'
-    kept_p, flipped_p = dr.maximum(kept, 0.0), dr.maximum(flipped, 0.0)
-    flip = u_facet * dr.maximum(kept_p + flipped_p, _TINY) < flipped_p
-    return mi.Vector3f(dr.select(flip, -m.x, m.x), dr.select(flip, -m.y, m.y), m.z)
 
 
 def pdf_ndf(d, m):

@@ -20,8 +20,9 @@ lobes are symmetric in their two directions, so it does not matter which of them
 * halfway: with h = ωi + ωo, 1 − cos θh = (hx² + hy²) / (|h|(|h| + hz)).
 
 **Sampling** draws the cosⁿ lobe about an axis with cos θ = u^(1/(n+1)), as cos θ = exp(t),
-sin²θ = −expm1(2t), t = ln(u)/(n+1): the naive sin θ = sqrt(1 − cos²θ) has a 10 % median error at
-n = 1e7 and returns exactly 0 (the sample collapses onto the axis) for 26 % of the samples there.
+sin²θ = −expm1(2t), t = ln(u)/(n+1): for large n the naive sin θ = sqrt(1 − cos²θ) cancels in
+float32, and returns exactly 0 (the sample collapses onto the axis) for a large share of the
+samples (``validation/phong_float32.py`` measures both).
 Density about the axis: (n+1)/(2π)·cosⁿθ. The mirror lobe is drawn about R; the halfway lobe draws
 H about N and reflects ωi on it, which multiplies the density by the Jacobian 1/(4 ωo·H) = 1/(2|h|)
 (capped at :data:`PDF_MAX` where it leaves float32's range, at the horizon for huge n).

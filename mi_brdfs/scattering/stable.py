@@ -16,15 +16,11 @@ Every division has a safe denominator: scalar variants compute with Python float
 
 from __future__ import annotations
 
-import math
-
 import drjit as dr
 
 
 def log1p(x):
     """log(1 + x) for x > −1, accurate to a few ulp also for |x| ≪ 1."""
-    if type(x) is float:  # scalar variants: Python's own, exact and 5× faster than the selects
-        return math.log1p(x) if x > -1.0 else -math.inf  # math.log1p(-1) raises
     u = 1.0 + x
     d = u - 1.0
     exact = d == 0.0  # 1 + x rounded to 1: log1p(x) = x to working precision
@@ -33,8 +29,6 @@ def log1p(x):
 
 def expm1(x):
     """exp(x) − 1 for x ≤ 88 (where eˣ is finite), accurate to a few ulp also for |x| ≪ 1."""
-    if type(x) is float:  # scalar variants, as in log1p
-        return math.expm1(x)
     u = dr.exp(x)
     d = u - 1.0
     exact = u == 1.0       # |x| below rounding: expm1(x) = x to working precision

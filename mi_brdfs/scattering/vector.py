@@ -13,18 +13,6 @@ import drjit as dr
 import mitsuba as mi
 
 
-def mitsuba_vector(v):
-    """``v`` for Mitsuba's own functions: itself (the terms compiled for Python floats build
-    their own vector type, and convert it here: :data:`mi_brdfs.scattering.floats.OVERRIDES`)."""
-    return v
-
-
-def terms_vector(v):
-    """A direction from Mitsuba's own functions for the terms: itself (the terms compiled for
-    Python floats read it once into their own vector type: ``floats.OVERRIDES``)."""
-    return v
-
-
 def dot(a, b):
     """a·b, rounded as ``dr.dot`` rounds it."""
     return dr.fma(a.z, b.z, dr.fma(a.y, b.y, a.x * b.x))

@@ -12,7 +12,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 from helpers import random_directions
-from test_microfacet_terms import chi2_normals, vec
+from test_microfacet_terms import chi2_normals, distribution, vec
 
 from mi_brdfs import checks
 from mi_brdfs.reference import cooktorrance as ref
@@ -40,8 +40,8 @@ def test01_d_and_g1_are_mitsubas(variant_llvm_ad_rgb, np_rng, kind, pair):
     distr = mi.MicrofacetDistribution(mf.mitsuba_type(kind), *pair, True)
     m = vec(_normals(np_rng, 20_000, *pair))
     v = vec(random_directions(np_rng, 40_000))
-    np.testing.assert_array_equal(np.array(mf.ndf(kind, _alpha(pair), m)), np.array(distr.eval(m)))
-    np.testing.assert_array_equal(np.array(mf.smith_g1_mitsuba(kind, _alpha(pair), v, m)),
+    np.testing.assert_array_equal(np.array(distribution(kind, _alpha(pair)).ndf(m)), np.array(distr.eval(m)))
+    np.testing.assert_array_equal(np.array(distribution(kind, _alpha(pair)).smith_g1_mitsuba(v, m)),
                                   np.array(distr.smith_g1(v, m)))
 
 
@@ -54,10 +54,10 @@ def test02_terms_match_the_float64_reference(variant_llvm_ad_rgb, np_rng, kind):
     wi, wo = random_directions(np_rng, 40_000, lower=False), random_directions(np_rng, 40_000)
     a = _alpha(pair)
     for ours, theirs in [
-        (mf.ndf(kind, a, vec(m)), ref.ndf(kind, pair, m)),
-        (mf.smith_lambda(kind, a, vec(wi)), ref.smith_lambda(kind, pair, wi)),
-        (mf.smith_g1(kind, a, vec(wo), vec(m)), ref.smith_g1(kind, pair, wo, m)),
-        (mf.smith_g1_mitsuba(kind, a, vec(wo), vec(m)), ref.smith_g1_rational(kind, pair, wo, m)),
+        (distribution(kind, a).ndf(vec(m)), ref.ndf(kind, pair, m)),
+        (distribution(kind, a).smith_lambda(vec(wi)), ref.smith_lambda(kind, pair, wi)),
+        (distribution(kind, a).smith_g1(vec(wo), vec(m)), ref.smith_g1(kind, pair, wo, m)),
+        (distribution(kind, a).smith_g1_mitsuba(vec(wo), vec(m)), ref.smith_g1_rational(kind, pair, wo, m)),
     ]:
         ours = np.array(ours, dtype=np.float64)
         np.testing.assert_allclose(ours, theirs, rtol=2e-4, atol=1e-6 * np.max(theirs))
@@ -69,10 +69,10 @@ def test03_anisotropy_is_seen(variant_llvm_ad_rgb, kind):
     diagonal and equals it after swapping x and y; the isotropic pair equals the plain α."""
     m = mi.Vector3f(0.3, 0.1, math.sqrt(1 - 0.1))
     swapped = mi.Vector3f(m.y, m.x, m.z)
-    d_uv = mf.ndf(kind, _alpha((0.1, 0.4)), m)
-    assert abs(d_uv[0] - mf.ndf(kind, _alpha((0.4, 0.1)), m)[0]) > 0.1 * d_uv[0]
-    assert d_uv[0] == pytest.approx(mf.ndf(kind, _alpha((0.4, 0.1)), swapped)[0], rel=1e-6)
-    assert mf.ndf(kind, _alpha((0.2, 0.2)), m)[0] == mf.ndf(kind, mi.Float(0.2), m)[0]
+    d_uv = distribution(kind, _alpha((0.1, 0.4))).ndf(m)
+    assert abs(d_uv[0] - distribution(kind, _alpha((0.4, 0.1))).ndf(m)[0]) > 0.1 * d_uv[0]
+    assert d_uv[0] == pytest.approx(distribution(kind, _alpha((0.4, 0.1))).ndf(swapped)[0], rel=1e-6)
+    assert distribution(kind, _alpha((0.2, 0.2))).ndf(m)[0] == distribution(kind, mi.Float(0.2)).ndf(m)[0]
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -114,18 +114,18 @@ def test06_normal_samplers_match_their_densities(variant_llvm_ad_rgb, kind, pair
                      math.cos(theta))
     dr.make_opaque(wi)
     if theta == 0.0:
-        ok, p = chi2_normals(lambda u: mf.sample_ndf(kind, a, u),
-                             lambda m: mf.pdf_ndf(mf.ndf(kind, a, m), m))
+        ok, p = chi2_normals(lambda u: distribution(kind, a).sample(u),
+                             lambda m: mf.pdf_ndf(distribution(kind, a).ndf(m), m))
         assert ok, p
-    ok, p = chi2_normals(lambda u: mf.sample_visible(kind, a, wi, u),
-                         lambda m: mf.pdf_visible(mf.ndf(kind, a, m),
-                                                  mf.smith_g1(kind, a, wi, m), wi, m))
+    ok, p = chi2_normals(lambda u: distribution(kind, a).sample_visible(wi, u),
+                         lambda m: mf.pdf_visible(distribution(kind, a).ndf(m),
+                                                  distribution(kind, a).smith_g1(wi, m), wi, m))
     assert ok, p
 
     def vcavity(u):
-        return mf.sample_vcavity_visible(kind, a, wi, mi.Point2f(u.x, u.y), u.z)
+        return distribution(kind, a).sample_vcavity_visible(wi, mi.Point2f(u.x, u.y), u.z)
 
-    ok, p = chi2_normals(vcavity, lambda m: mf.pdf_visible(mf.ndf(kind, a, m),
+    ok, p = chi2_normals(vcavity, lambda m: mf.pdf_visible(distribution(kind, a).ndf(m),
                                                            mf.vcavity_g1(wi, m), wi, m), dim=3)
     assert ok, p
 
@@ -134,6 +134,6 @@ def test07_chi2_rejects_the_isotropic_sampler(variant_llvm_ad_rgb):
     """The χ² above can fail: normals drawn with the isotropic √(αu αv) do not follow the
     anisotropic D cosθ."""
     a = _alpha((0.05, 0.5))
-    ok, p = chi2_normals(lambda u: mf.sample_ndf("beckmann", mi.Float(math.sqrt(0.025)), u),
-                         lambda m: mf.pdf_ndf(mf.ndf("beckmann", a, m), m))
+    ok, p = chi2_normals(lambda u: distribution("beckmann", mi.Float(math.sqrt(0.025))).sample(u),
+                         lambda m: mf.pdf_ndf(distribution("beckmann", a).ndf(m), m))
     assert not ok, p

@@ -19,6 +19,13 @@ from mi_brdfs.scattering import microfacet as mf
 KINDS = ["beckmann", "ggx"]
 
 
+def distribution(kind, alpha):
+    """The package's microfacet distribution of ``kind``, α a number or a pair (αu, αv)."""
+    if type(alpha) is tuple:
+        return mf.Distribution(kind, *alpha)
+    return mf.Distribution(kind, alpha)
+
+
 def vec(a):
     a = np.asarray(a, dtype=np.float32)
     return mi.Vector3f(mi.Float(a[:, 0]), mi.Float(a[:, 1]), mi.Float(a[:, 2]))
@@ -38,8 +45,8 @@ def test01_d_and_g1_are_mitsubas(variant_llvm_ad_rgb, np_rng, kind, alpha):
     distr = mi.MicrofacetDistribution(mf.mitsuba_type(kind), alpha, True)
     m, v = vec(normals(np_rng, 20_000, alpha)), vec(random_directions(np_rng, 40_000))
     a = mi.Float(alpha)
-    np.testing.assert_array_equal(np.array(mf.ndf(kind, a, m)), np.array(distr.eval(m)))
-    np.testing.assert_array_equal(np.array(mf.smith_g1_mitsuba(kind, a, v, m)),
+    np.testing.assert_array_equal(np.array(distribution(kind, a).ndf(m)), np.array(distr.eval(m)))
+    np.testing.assert_array_equal(np.array(distribution(kind, a).smith_g1_mitsuba(v, m)),
                                   np.array(distr.smith_g1(v, m)))
 
 
@@ -51,8 +58,8 @@ def test02_exact_g1_vs_mitsubas_approximation(variant_llvm_ad_rgb, np_rng):
     m, v = vec(normals(np_rng, 20_000, 0.3)), vec(random_directions(np_rng, 40_000, lower=False))
     a = mi.Float(0.3)
     for kind in KINDS:
-        exact = np.array(mf.smith_g1(kind, a, v, m))
-        approx = np.array(mf.smith_g1_mitsuba(kind, a, v, m))
+        exact = np.array(distribution(kind, a).smith_g1(v, m))
+        approx = np.array(distribution(kind, a).smith_g1_mitsuba(v, m))
         rel = np.abs(approx - exact) / np.maximum(exact, 1e-6) * (exact > 1e-3)
         if kind == "ggx":
             np.testing.assert_allclose(approx, exact, rtol=2e-6, atol=1e-7)
@@ -70,10 +77,10 @@ def test03_terms_match_the_float64_reference(variant_llvm_ad_rgb, np_rng, kind):
     h = wi + wo
     h /= np.linalg.norm(h, axis=1, keepdims=True)
     pairs = [
-        (mf.ndf(kind, a, vec(m)), ref.ndf(kind, alpha, m)),
-        (mf.smith_lambda(kind, a, vec(wi)), ref.smith_lambda(kind, alpha, wi)),
-        (mf.smith_g1(kind, a, vec(wo), vec(m)), ref.smith_g1(kind, alpha, wo, m)),
-        (mf.smith_g1_mitsuba(kind, a, vec(wo), vec(m)), ref.smith_g1_rational(kind, alpha, wo, m)),
+        (distribution(kind, a).ndf(vec(m)), ref.ndf(kind, alpha, m)),
+        (distribution(kind, a).smith_lambda(vec(wi)), ref.smith_lambda(kind, alpha, wi)),
+        (distribution(kind, a).smith_g1(vec(wo), vec(m)), ref.smith_g1(kind, alpha, wo, m)),
+        (distribution(kind, a).smith_g1_mitsuba(vec(wo), vec(m)), ref.smith_g1_rational(kind, alpha, wo, m)),
         (mf.vcavity_g1(vec(wo), vec(m)), ref.vcavity_g1(wo, m)),
         (mf.vcavity_g(vec(wi), vec(wo), vec(h)), ref.vcavity_g(wi, wo, h)),
     ]
@@ -143,12 +150,12 @@ def test07_normal_samplers_match_their_densities(variant_llvm_ad_rgb, kind, alph
     """sample_ndf ~ D cosθ and sample_visible ~ the visible normals with the *exact* G1."""
     a = mi.Float(alpha)
     wi = mi.Vector3f(math.sin(1.2), 0, math.cos(1.2))
-    ok, p = chi2_normals(lambda u: mf.sample_ndf(kind, a, u),
-                         lambda m: mf.pdf_ndf(mf.ndf(kind, a, m), m))
+    ok, p = chi2_normals(lambda u: distribution(kind, a).sample(u),
+                         lambda m: mf.pdf_ndf(distribution(kind, a).ndf(m), m))
     assert ok, p
-    ok, p = chi2_normals(lambda u: mf.sample_visible(kind, a, wi, u),
-                         lambda m: mf.pdf_visible(mf.ndf(kind, a, m),
-                                                  mf.smith_g1(kind, a, wi, m), wi, m))
+    ok, p = chi2_normals(lambda u: distribution(kind, a).sample_visible(wi, u),
+                         lambda m: mf.pdf_visible(distribution(kind, a).ndf(m),
+                                                  distribution(kind, a).smith_g1(wi, m), wi, m))
     assert ok, p
 
 
@@ -167,14 +174,14 @@ def test08_vcavity_visible_normals(variant_llvm_ad_rgb, kind, theta):
     dr.make_opaque(wi)
 
     def sample(u):
-        return mf.sample_vcavity_visible(kind, a, wi, mi.Point2f(u.x, u.y), u.z)
+        return distribution(kind, a).sample_vcavity_visible(wi, mi.Point2f(u.x, u.y), u.z)
 
-    ok, p = chi2_normals(sample, lambda m: mf.pdf_visible(mf.ndf(kind, a, m),
+    ok, p = chi2_normals(sample, lambda m: mf.pdf_visible(distribution(kind, a).ndf(m),
                                                           mf.vcavity_g1(wi, m), wi, m), dim=3)
     assert ok, p
     if theta > 1.0:
-        ok, p = chi2_normals(sample, lambda m: mf.pdf_visible(mf.ndf(kind, a, m),
-                                                              mf.smith_g1(kind, a, wi, m), wi,
+        ok, p = chi2_normals(sample, lambda m: mf.pdf_visible(distribution(kind, a).ndf(m),
+                                                              distribution(kind, a).smith_g1(wi, m), wi,
                                                               m), dim=3)
         assert not ok, p
 
@@ -189,7 +196,7 @@ def test09_normal_sampler_without_float32_collapse(variant_llvm_ad_rgb):
     rng = np.random.default_rng(3)
     u = mi.Point2f(*[mi.Float(rng.random(200_000).astype(np.float32)) for _ in range(2)])
     for kind, median in (("beckmann", math.sqrt(math.log(2))), ("ggx", 1.0)):
-        m = mf.sample_ndf(kind, mi.Float(1e-4), u)
+        m = distribution(kind, mi.Float(1e-4)).sample(u)
         x, y, z = (np.array(c, dtype=np.float64) for c in (m.x, m.y, m.z))
         assert not ((x == 0) & (y == 0)).any()
         assert np.median(np.hypot(x, y) / z) / 1e-4 == pytest.approx(median, rel=5e-3)
@@ -220,13 +227,13 @@ def test10_terms_on_python_floats(variant_scalar_rgb, np_rng):
                 m = half_vector(wi, wo)
                 assert type(m.x) is float
                 if not m.z > 0:  # ωo = −ωi (NaN) or a facet below the horizon
-                    assert mf.ndf(kind, alpha, m) == 0 or math.isnan(m.z)
+                    assert distribution(kind, alpha).ndf(m) == 0 or math.isnan(m.z)
                     continue
                 mn, win, won = (np.array([[v.x, v.y, v.z]], dtype=np.float64) for v in (m, wi, wo))
                 pairs = [
-                    (mf.ndf(kind, alpha, m), ref.ndf(kind, alpha, mn)),
-                    (mf.smith_g1(kind, alpha, wi, m), ref.smith_g1(kind, alpha, win, mn)),
-                    (mf.smith_g1_mitsuba(kind, alpha, wo, m),
+                    (distribution(kind, alpha).ndf(m), ref.ndf(kind, alpha, mn)),
+                    (distribution(kind, alpha).smith_g1(wi, m), ref.smith_g1(kind, alpha, win, mn)),
+                    (distribution(kind, alpha).smith_g1_mitsuba(wo, m),
                      ref.smith_g1_rational(kind, alpha, won, mn)),
                     (mf.vcavity_g1(wi, m), ref.vcavity_g1(win, mn)),
                     (mf.vcavity_g(wi, wo, m), ref.vcavity_g(win, won, mn)),
@@ -236,7 +243,7 @@ def test10_terms_on_python_floats(variant_scalar_rgb, np_rng):
                     # abs: D is cut to 0 where D·cosθm ≤ 1e-20 (microfacet.D_COS_MIN), as in Mitsuba
                     assert ours == pytest.approx(float(theirs[0]), rel=1e-5, abs=1e-19)
                 for u in ((0.3, 0.7), (0.999999, 0.1), (0.0, 0.0)):
-                    s = mf.sample_ndf(kind, alpha, mi.Point2f(*u))
+                    s = distribution(kind, alpha).sample(mi.Point2f(*u))
                     assert math.isfinite(s.z) and s.z > 0
                 checked += 1
     assert checked > 1000

@@ -11,7 +11,7 @@ from pathlib import Path
 import mitsuba as mi
 import numpy as np
 
-from ..errors import ParameterError
+from .errors import ParameterError
 
 
 def conductor_names() -> list[str]:
@@ -48,7 +48,7 @@ def material_ior(name, plugin: str = "cooktorrance"):
                            if n in names)
         raise ParameterError(plugin, "material", name,
                              f"must name one of Mitsuba's {len(names)} measured conductors, e.g. "
-                             f"{common} (all: mi_brdfs.plugins.materials.conductor_names())")
+                             f"{common} (all: mi_brdfs.materials.conductor_names())")
     found = {}
 
     class Collect(mi.TraversalCallback):

@@ -1,291 +1,24 @@
 """
-What every plugin of the package shares: reading and validating properties, and the few
-primitives whose best implementation differs between scalar and JIT variants.
+Reading and validating the plugins' properties: numbers, choices, booleans, reflectances and other
+textures, roughness.
 
-Property readers raise :class:`mi_brdfs.ParameterError` with one line naming the plugin, the
+Every reader raises :class:`mi_brdfs.ParameterError` with one line naming the plugin, the
 parameter, the value and what is allowed. Mitsuba wraps an exception raised in a plugin
 constructor into its own ``RuntimeError`` (with the scene location); the CLI unwraps it again.
+A texture whose range cannot be known when the scene loads is clamped into range when it is
+evaluated (:func:`clamped`), so that no value outside a parameter's range reaches a model.
 """
 
 from __future__ import annotations
 
 import math
-from types import SimpleNamespace
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ..errors import Description, ParameterError
-from ..scattering import floats
-
-# -------------------------------------------------------------------------------------------------
-# Variant primitives
-# -------------------------------------------------------------------------------------------------
-
-
-def variant_tools() -> SimpleNamespace:
-    """
-    The few primitives whose best form differs between scalar and JIT variants, for the
-    current variant (a plugin module calls this once at import: :mod:`mi_brdfs.registry`
-    imports it afresh in every variant).
-
-    In JIT variants a BSDF method is traced once for all lanes: ``select`` is ``dr.select``,
-    both branches of ``choose`` are traced, and a new ``BSDFSample3f`` must come from
-    ``dr.zeros`` (a default-constructed one has width-0 fields that fail in ``mi.render``). In
-    scalar variants Mitsuba calls the method once per ray with Python floats and bools, so a
-    Python conditional picks the one branch needed and ``none`` allows an early return.
-    """
-    jit = dr.is_jit_v(mi.Float)
-    if jit:
-        def select(mask, a, b):
-            return dr.select(mask, a, b)
-
-        def choose(mask, a, b):
-            """select(mask, a(), b()): both are traced, as every lane may need either (only
-            one where ``mask`` is a Python bool)."""
-            if type(mask) is bool:
-                return a() if mask else b()
-            return dr.select(mask, a(), b())
-
-        def new_sample():
-            return dr.zeros(mi.BSDFSample3f)
-
-        def none(mask):
-            return False  # unknowable while a kernel is traced symbolically
-    else:
-        def select(mask, a, b):
-            return a if mask else type(a)(b)
-
-        def choose(mask, a, b):
-            """select(mask, a(), b()), computing only the one needed."""
-            return a() if mask else b()
-
-        new_sample = mi.BSDFSample3f
-
-        def none(mask):
-            return not mask
-
-    colour = mi.UnpolarizedSpectrum
-    Vector3f, Point2f = mi.Vector3f, mi.Point2f
-
-    def vector(v):
-        """A direction as ``mi.Vector3f``: the built-ins also take lists and tuples."""
-        return v if type(v) is Vector3f else Vector3f(v)
-
-    if jit:
-        def direction(v):
-            """A direction for the terms: ``mi.Vector3f`` (lists and tuples converted)."""
-            return vector(v)
-
-        def to_mitsuba(v):
-            """A direction from the terms as ``mi.Vector3f`` (for ``bs.wo``)."""
-            return v
-    else:
-        # the terms compiled for floats read directions as floats.Vec3 (5× cheaper to read)
-        to_mitsuba, Vec3, new = floats.to_mitsuba, floats.Vec3, object.__new__
-
-        def direction(v):
-            """A direction for the terms: :class:`~mi_brdfs.scattering.floats.Vec3` (this
-            variant's ``mi.Vector3f`` unpacked directly, the common case: 2× faster; it keeps
-            the vector, which to_mitsuba gives back)."""
-            if type(v) is Vector3f:
-                d = new(Vec3)
-                d.x, d.y, d.z = v
-                d.source = v
-                return d
-            return floats.to_vec3(v)
-
-    def point2(u):
-        """A 2D sample as ``mi.Point2f``: the built-ins also take lists and tuples."""
-        return u if type(u) is Point2f else Point2f(u)
-
-    def specialise_class(cls):
-        """A plugin class as this variant runs it: itself in JIT variants, its methods compiled
-        for Python floats in scalar ones (:func:`~mi_brdfs.scattering.floats.specialise_class`)."""
-        return cls if jit else floats.specialise_class(cls)
-
-    def configure(obj, values, nones=()):
-        """Compile ``obj``'s eval_pdf and sample for its configuration in scalar variants
-        (:func:`~mi_brdfs.scattering.floats.configure`); nothing in JIT variants, where the
-        trace drops what is switched off."""
-        if not jit:
-            floats.configure(obj, values, nones)
-
-    def terms(module):
-        """A module of :mod:`mi_brdfs.scattering` as this variant runs it: itself in JIT
-        variants, compiled for Python floats in scalar ones (:mod:`~mi_brdfs.scattering.floats`)."""
-        return module if jit else floats.specialise(module)
-
-    def spectrum(value):
-        """A spectrum, or a colour from a list of per-channel floats."""
-        return colour(*value) if type(value) is list else value
-
-    def scale(value, a, b=1.0):
-        """(value·a)·b for a spectrum, or for a list of per-channel floats (a constant
-        spectrum read by :func:`constant_channels`), which gives one colour."""
-        if type(value) is list:
-            return colour(*[c * a * b for c in value])
-        return value * a * b
-
-    UInt32 = mi.UInt32
-    glossy_flag, diffuse_flag = flag("GlossyReflection"), flag("DiffuseReflection")
-
-    cosine_hemisphere = mi.warp.square_to_cosine_hemisphere
-    cosine_hemisphere_pdf = mi.warp.square_to_cosine_hemisphere_pdf
-    Spectrum, Float = mi.Spectrum, mi.Float
-
-    def glossy_or_diffuse(bs, sample1, sample2, p_glossy, has_diffuse, has_glossy, glossy,
-                          glossy_index, diffuse_index):
-        """
-        Fill ``bs`` for a two-lobe reflection model (``phong``, ``ward``): ωo from
-        ``glossy()`` or from the cosine-weighted hemisphere (``sample2``), with both lobes on
-        the glossy one where ``sample1`` < ``p_glossy``; the lobe's type and component index
-        (None: that lobe is absent), η = 1.
-        """
-        pick = (sample1 < p_glossy) if has_diffuse and has_glossy else has_glossy
-        bs.wo = to_mitsuba(choose(pick, glossy, lambda: cosine_hemisphere(sample2)))
-        bs.sampled_type = select(pick, UInt32(glossy_flag), UInt32(diffuse_flag))
-        bs.sampled_component = select(pick, UInt32(glossy_index or 0), UInt32(diffuse_index or 0))
-        bs.eta = 1.0
-        return bs
-
-    def cosine_sample(bs, sample2):
-        """
-        Fill ``bs`` for a one-lobe diffuse model (``lambert``, ``orennayar``): ωo from the
-        cosine-weighted hemisphere, pdf cosθo/π, component 0; returns (ωo, pdf).
-        """
-        bs.wo = wo = cosine_hemisphere(point2(sample2))
-        bs.pdf = pdf = cosine_hemisphere_pdf(wo)
-        bs.eta = 1.0
-        bs.sampled_type = UInt32(diffuse_flag)
-        bs.sampled_component = UInt32(0)
-        return wo, pdf
-
-    def diffuse_methods():
-        """``eval``, ``pdf`` and ``eval_pdf`` of a one-lobe diffuse model, each 0 where the
-        context disables the lobe, else the class's ``_eval_pdf(si, wo, active)``."""
-        def eval(self, ctx, si, wo, active=True):
-            if not ctx.is_enabled(diffuse_flag):
-                return Spectrum(0.0)
-            return self._eval_pdf(si, wo, active)[0]
-
-        def pdf(self, ctx, si, wo, active=True):
-            if not ctx.is_enabled(diffuse_flag):
-                return Float(0.0)
-            return self._eval_pdf(si, wo, active)[1]
-
-        def eval_pdf(self, ctx, si, wo, active=True):
-            if not ctx.is_enabled(diffuse_flag):
-                return Spectrum(0.0), Float(0.0)
-            return self._eval_pdf(si, wo, active)
-
-        return eval, pdf, eval_pdf
-
-    def weight(value, pdf, active):
-        """The sample weight f·cosθo / pdf, 0 where inactive or the pdf is 0."""
-        ok = active & (pdf > 0)
-        return select(ok, value / select(ok, pdf, 1.0), 0.0)
-
-    return SimpleNamespace(
-        jit=jit,
-        glossy_or_diffuse=glossy_or_diffuse,
-        cosine_sample=cosine_sample,
-        diffuse_methods=diffuse_methods,
-        weight=weight,
-        select=select,
-        choose=choose,
-        new_sample=new_sample,
-        # Mitsuba's dr::none_or<false>(mask): true only where it is known that no lane is
-        # active, i.e. in scalar variants for a false mask; an early return there saves the rest.
-        none=none,
-        # Whether a constant spectrum can be read once as per-channel Python floats (scalar RGB
-        # and mono variants; spectral ones evaluate spectra at each call's wavelengths), so that
-        # the terms run on floats and one colour is built per call.
-        per_channel=not jit and not mi.is_spectral,
-        scale=scale,
-        terms=terms,
-        specialise_class=specialise_class,
-        configure=configure,
-        vector=vector,
-        direction=direction,
-        to_mitsuba=to_mitsuba,
-        point2=point2,
-        spectrum=spectrum,
-        # Mueller matrices in polarized variants; the identity elsewhere.
-        depolarize=mi.depolarizer if mi.is_polarized else (lambda value: value),
-    )
-
-
-def constant_channels(tex) -> list[float] | None:
-    """A constant texture's value per channel as Python floats (where
-    ``variant_tools().per_channel``), else None."""
-    if tex.is_spatially_varying():
-        return None
-    return [float(c) for c in mi.unpolarized_spectrum(tex.eval(mi.SurfaceInteraction3f()))]
-
-
-def flag(*names: str) -> int:
-    """The integer OR of ``mi.BSDFFlags`` members given by name."""
-    value = 0
-    for name in names:
-        value |= int(getattr(mi.BSDFFlags, name))
-    return value
-
-
-# Methods that several plugin classes share. nanobind allows a single base class (the variant's
-# mi.BSDF), so a plugin takes them as class attributes (``eval = _common.eval_half``), not
-# from a mixin.
-
-def eval_half(self, ctx, si, wo, active=True):
-    """``eval`` of a plugin whose ``eval_pdf`` does the work (in JIT variants the unused pdf
-    is not computed: the trace drops it)."""
-    return self.eval_pdf(ctx, si, wo, active)[0]
-
-
-def pdf_half(self, ctx, si, wo, active=True):
-    """``pdf`` of a plugin whose ``eval_pdf`` does the work."""
-    return self.eval_pdf(ctx, si, wo, active)[1]
-
-
-def set_two_lobes(self, diffuse, specular, glossy_flags: int) -> None:
-    """
-    The components of a two-lobe reflection model (``phong``, ``ward``), in order (diffuse,
-    glossy), of the lobes whose reflectance is not the constant 0 (a lobe that is 0 is left
-    out entirely); their indices in ``self._diffuse``, ``self._glossy`` (None: absent).
-    """
-    self._diffuse = self._glossy = None
-    components = []
-    if not is_zero(diffuse):
-        self._diffuse = len(components)
-        components.append(flag("DiffuseReflection", "FrontSide"))
-    if not is_zero(specular):
-        self._glossy = len(components)
-        components.append(glossy_flags)
-    self.m_components = components  # a copy crosses to C++: assign, don't append
-    self.m_flags = 0
-    for c in components:
-        self.m_flags |= c
-
-
-def two_lobes_enabled(self, ctx):
-    """Which lobes of :func:`set_two_lobes` the context asks for: (diffuse, glossy), bools."""
-    return (self._diffuse is not None and
-            ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, self._diffuse),
-            self._glossy is not None and
-            ctx.is_enabled(mi.BSDFFlags.GlossyReflection, self._glossy))
-
-
-def two_lobes_diffuse_reflectance(self, si, active=True):
-    """``eval_diffuse_reflectance`` of :func:`set_two_lobes`'s models: ρd, or 0 without it."""
-    if self._diffuse is None:
-        return mi.Spectrum(0.0)
-    return self.m_diffuse_reflectance.eval(si, active)
-
-
-# -------------------------------------------------------------------------------------------------
-# Property readers
-# -------------------------------------------------------------------------------------------------
+from ..scattering.microfacet import ALPHA_MIN
 
 _T = None
 
@@ -475,7 +208,6 @@ def roughness(props, plugin: str, default: float = 0.1):
     of the pair, not together with ``alpha``; warns where a value is below the clamp
     :data:`mi_brdfs.scattering.microfacet.ALPHA_MIN` of the microfacet terms.
     """
-    from ..scattering.microfacet import ALPHA_MIN
     given = [name for name in ("alpha_u", "alpha_v") if name in props]
     if given:
         if "alpha" in props:
@@ -514,27 +246,17 @@ def number_or_texture(props, plugin: str, name: str, default: float, lo: float, 
     return number(props, plugin, name, default, lo, hi)
 
 
-def alpha_at(alpha_u, alpha_v, si, active):
+def roughness_at(alpha_u, alpha_v, si, active):
     """
-    α of :func:`roughness`'s textures at ``si``, clamped to
-    :data:`mi_brdfs.scattering.microfacet.ALPHA_MIN` as Mitsuba clamps it: a number when
-    isotropic (``alpha_v`` is ``alpha_u``), else the pair (αu, αv).
+    (αu, αv) of :func:`roughness`'s textures at ``si``, clamped to
+    :data:`mi_brdfs.scattering.microfacet.ALPHA_MIN` as Mitsuba clamps it; αv is None when
+    isotropic (``alpha_v`` is ``alpha_u``), as
+    :class:`~mi_brdfs.scattering.microfacet.Distribution` takes them.
     """
-    from ..scattering.microfacet import ALPHA_MIN
     a_u = dr.maximum(alpha_u.eval_1(si, active), ALPHA_MIN)
-    return a_u if alpha_v is alpha_u else (a_u, dr.maximum(alpha_v.eval_1(si, active), ALPHA_MIN))
-
-
-def constant_alpha(alpha_u, alpha_v):
-    """α of :func:`roughness`'s textures as Python floats (clamped), when neither varies over the
-    surface (for scalar variants, read once); else None."""
-    from ..scattering.microfacet import ALPHA_MIN
-    textures = (alpha_u,) if alpha_v is alpha_u else (alpha_u, alpha_v)
-    if any(tex.is_spatially_varying() for tex in textures):
-        return None
-    si = mi.SurfaceInteraction3f()
-    const = tuple(max(float(tex.eval_1(si)), ALPHA_MIN) for tex in textures)
-    return const if len(const) > 1 else const[0]
+    if alpha_v is alpha_u:
+        return a_u, None
+    return a_u, dr.maximum(alpha_v.eval_1(si, active), ALPHA_MIN)
 
 
 def number(props, plugin: str, name: str, default: float, lo: float = -math.inf,

@@ -1,0 +1,191 @@
+"""
+The reflection lobe of :mod:`~mi_brdfs.plugins.cooktorrance` without transmission: the
+Cook-Torrance microfacet lobe ks·F·D·G/(4 cosθi cosθo), one-sided, with the paper's optional
+Lambertian base ρd/π, the two mixed for sampling (Veach 1997, §9.2.4). pbrt-v4's
+``ConductorBxDF`` and Mitsuba's ``roughconductor`` are the same lobe without the base.
+
+Every method works in the local frame (normal +z), takes ``si.wi`` and ``wo`` as Mitsuba hands
+them, and looks ``mi.*`` up when it is called, so that one class serves every variant.
+"""
+
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from ..scattering import fresnel, microfacet, mixture, vector
+from . import lobes, properties
+
+#: F of each ``fresnel`` setting, per spectrum (``none``: F ≡ 1, no term).
+FRESNEL_TERMS = {"exact": fresnel.exact, "schlick": fresnel.schlick, "none": None}
+
+
+class ConductorLobe:
+    """
+    The microfacet reflection lobe and its diffuse base, for
+    :class:`~mi_brdfs.plugins.cooktorrance.CookTorrance` to delegate to. Component 0 is the
+    microfacet lobe (as ``roughconductor``'s only one), component 1 the diffuse base.
+
+    Parameter ``kind`` (str): 'beckmann' or 'ggx'. Parameter ``alpha_u``, ``alpha_v``
+    (mi.Texture): the roughness, the same texture when isotropic. Parameter ``shadowing``
+    (str): 'vcavity' or 'smith'. Parameter ``fresnel`` (str): 'exact', 'schlick' or 'none'.
+    Parameter ``sample_visible`` (bool): visible normals, else D·cosθ. Parameter ``eta``,
+    ``k`` (mi.Texture | None): the complex index (None with ``fresnel`` 'none').
+    Parameter ``specular`` (mi.Texture): ks. Parameter ``diffuse`` (mi.Texture | None): ρd,
+    None for no base.
+    """
+
+    def __init__(self, kind, alpha_u, alpha_v, shadowing, fresnel, sample_visible, eta, k,
+                 specular, diffuse):
+        self.kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
+        self.shadowing, self.sample_visible = shadowing, sample_visible
+        self.fresnel_term = FRESNEL_TERMS[fresnel]
+        self.eta, self.k = eta, k
+        self.specular, self.diffuse = specular, diffuse
+
+    def distribution(self, si, active) -> microfacet.Distribution:
+        """The microfacet distribution at ``si``."""
+        return microfacet.Distribution(
+            self.kind, *properties.roughness_at(self.alpha_u, self.alpha_v, si, active))
+
+    def enabled(self, ctx):
+        """Which lobes the context enables: (microfacet, diffuse), bools."""
+        return (ctx.is_enabled(mi.BSDFFlags.GlossyReflection, 0),
+                self.diffuse is not None and ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, 1))
+
+    def eval_pdf(self, ctx, si, wo, active=True, p_microfacet=None):
+        """(f·cosθo, pdf of :meth:`sample`) at ``wo``: the enabled lobes and their mixture."""
+        use_mf, use_diffuse = self.enabled(ctx)
+        if not (use_mf or use_diffuse):
+            return mi.Spectrum(0.0), mi.Float(0.0)
+        wi = si.wi
+        active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
+        if lobes.none(active):
+            return mi.Spectrum(0.0), mi.Float(0.0)
+        if use_mf:
+            value, pdf = self._microfacet(si, wi, wo, active)
+        if use_diffuse:
+            # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
+            value_d = self.diffuse.eval(si, active) * dr.inv_pi * wo.z
+            pdf_d = wo.z * dr.inv_pi
+            if use_mf:  # both: their sum, and the mixture of both samplers' densities
+                if p_microfacet is None:
+                    p_microfacet = self._p_microfacet(si, wi, active)
+                value, pdf = value + value_d, mixture.pdf(p_microfacet, pdf, pdf_d)
+            else:
+                value, pdf = value_d, pdf_d
+        return lobes.finish(value, pdf, active)
+
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        """(BSDFSample3f, weight f·cosθo/pdf): a microfacet normal reflected, or the
+        cosine-weighted hemisphere, chosen by ``sample1``."""
+        bs, sample2 = lobes.new_sample(), lobes.point2(sample2)
+        use_mf, use_diffuse = self.enabled(ctx)
+        if not (use_mf or use_diffuse):
+            return bs, mi.Spectrum(0.0)
+        wi = si.wi
+        active = active & (wi.z > 0)  # one-sided: the local frame's z is cosθ
+        if lobes.none(active):
+            return bs, mi.Spectrum(0.0)
+        if not use_diffuse:
+            return bs, self._sample_microfacet(si, wi, sample1, sample2, active, bs)
+        # Both lobes: sample1 picks the microfacet lobe with probability p (and, rescaled, a
+        # facet of the V-groove); the weight is f·cosθo over the mixture density.
+        p = self._p_microfacet(si, wi, active) if use_mf else 0.0
+        pick = (sample1 < p) if use_mf else False
+
+        def reflected():
+            u_facet = mixture.rescale(sample1, p)
+            return vector.reflect(wi, self._sample_normal(si, wi, active, sample2, u_facet))
+
+        bs.wo = lobes.choose(pick, reflected,
+                             lambda: mi.warp.square_to_cosine_hemisphere(sample2))
+        bs.sampled_type = dr.select(pick, mi.UInt32(lobes.flag("GlossyReflection")),
+                                    mi.UInt32(lobes.flag("DiffuseReflection")))
+        bs.sampled_component = dr.select(pick, mi.UInt32(0), mi.UInt32(1))
+        bs.eta = 1.0
+        value, bs.pdf = self.eval_pdf(ctx, si, bs.wo, active, p)
+        return bs, lobes.weight(value, bs.pdf, active)
+
+    def _sample_microfacet(self, si, wi, sample1, sample2, active, bs):
+        """Fill ``bs`` from the microfacet lobe alone; returns the weight in closed form."""
+        # a microfacet normal m, and ωo = ωi reflected about it
+        m = self._sample_normal(si, wi, active, sample2, sample1)
+        bs.wo = wo = vector.reflect(wi, m)
+        bs.sampled_type = mi.UInt32(lobes.flag("GlossyReflection"))
+        bs.sampled_component = mi.UInt32(0)
+        bs.eta = 1.0
+        # the terms at ωo as stored, so that bs.pdf = pdf(bs.wo)
+        active = active & (wo.z > 0)
+        if lobes.none(active):
+            return mi.Spectrum(0.0)
+        weight, bs.pdf = self._microfacet(si, wi, wo, active, weight=True)
+        return dr.select(active, lobes.depolarize(weight), 0.0)
+
+    def _sample_normal(self, si, wi, active, sample2, u_facet):
+        """A microfacet normal: D·cosθ, Smith's visible normals of ωi, or the V-cavity's
+        (whose facet of the V-groove ``u_facet`` picks)."""
+        distr = self.distribution(si, active)
+        if not self.sample_visible:
+            return distr.sample(sample2)
+        if self.shadowing == "smith":
+            return distr.sample_visible(wi, sample2)
+        return distr.sample_vcavity_visible(wi, sample2, u_facet)
+
+    def _microfacet(self, si, wi, wo, active, weight=False):
+        """
+        (f·cosθo, pdf) of the microfacet lobe for ωi, ωo above the surface; with ``weight``
+        (for :meth:`sample`) (f·cosθo/pdf, pdf), in closed form where D and 4 cosθi cancel:
+        ks·F·G1(ωo) (Smith's visible normals), ks·F·G/G1(ωi) (the V-cavity's),
+        ks·F·G·(ωo·m)/(cosθi cosθm) (D·cos).
+        """
+        m = vector.half_vector(wi, wo)
+        cos_im, cos_om = vector.dot(wi, m), vector.dot(wo, m)
+        # Both directions must see the front of the facet: false only when rounding makes
+        # ωi + ωo vanish (grazing, nearly opposite directions).
+        active = active & (cos_im > 0) & (cos_om > 0)
+        if lobes.none(active):
+            return mi.Spectrum(0.0), mi.Float(0.0)
+        distr = self.distribution(si, active)
+        # D, the masking-shadowing G, and G1(ωi) of the visible normals
+        D = distr.ndf(m)
+        if self.shadowing == "smith":
+            g1_wi = distr.smith_g1_mitsuba(wi, m, cos_im)
+            g1_wo = distr.smith_g1_mitsuba(wo, m, cos_om)
+            G = g1_wi * g1_wo
+        else:
+            G = microfacet.vcavity_g(wi, wo, m)
+            g1_wi = microfacet.vcavity_g1(wi, m) if self.sample_visible else None
+        # the density of ωo: visible normals or D·cosθm, through the reflection's Jacobian
+        if self.sample_visible:
+            pdf = microfacet.pdf_visible_reflection(D, g1_wi, wi)
+        else:
+            pdf = microfacet.pdf_ndf(D, m) * microfacet.reflection_jacobian(wo, m)
+        # f·cosθo = ks F D G / (4 cosθi cosθo) · cosθo, or the sample weight
+        if not weight:
+            factor = D * G / (4.0 * wi.z)
+        elif not self.sample_visible:
+            factor = G * cos_om / dr.maximum(wi.z * m.z, 1e-30)
+        elif self.shadowing == "smith":
+            factor = g1_wo
+        else:
+            factor = G / dr.maximum(g1_wi, 1e-30)
+        if weight:
+            active = active & (pdf > 0)
+        value = self._specular(si, cos_im, factor, active)
+        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
+
+    def _specular(self, si, cos_theta, factor, active):
+        """ks·factor·F(cosθ), F at the cosine between ωi and the facet normal."""
+        value = self.specular.eval(si, active) * factor
+        if self.fresnel_term is not None:
+            value = value * self.fresnel_term(cos_theta, self.eta.eval(si, active),
+                                              self.k.eval(si, active))
+        return value
+
+    def _p_microfacet(self, si, wi, active):
+        """Probability of sampling the microfacet lobe when both lobes are on: in proportion
+        to mean(ks·F(cosθi)) and mean(ρd)."""
+        w_mf = dr.mean(self._specular(si, wi.z, 1.0, active))
+        w_d = dr.mean(self.diffuse.eval(si, active))
+        return mixture.probability(w_mf, w_d, 1.0)
