@@ -1,0 +1,47 @@
+"""
+The ``mi-brdfs`` command line (also ``python -m mi_brdfs``): a thin layer over the library.
+
+User errors (a missing scene, a bad parameter, an unwritable output) print one line
+``mi-brdfs: error: ...`` and exit with status 2; no traceback. An interrupted render writes what
+it has and exits with status 130.
+
+The arguments of each subcommand are in :mod:`mi_brdfs.cli.parser`, what each does in
+:mod:`mi_brdfs.cli.commands`.
+"""
+
+from __future__ import annotations
+
+import sys
+import warnings
+
+from .commands import EXIT_INTERRUPTED, EXIT_USER_ERROR
+from .parser import _parser
+
+
+def _one_line_warnings(message, category, filename, lineno, file=None, line=None):
+    print(f"mi-brdfs: warning: {message}", file=sys.stderr if file is None else file)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    warnings.showwarning = _one_line_warnings
+    try:
+        import mi_brdfs  # noqa: F401  (preflight: libatomic, libLLVM)
+        from ..errors import MiBrdfsError
+    except ImportError as e:
+        print(f"mi-brdfs: error: {e}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    try:
+        return args.func(args)
+    except MiBrdfsError as e:
+        print(f"mi-brdfs: error: {e}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except KeyboardInterrupt:
+        print("mi-brdfs: interrupted; nothing written", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:  # the reader went away (| head): stop quietly, as cat does
+        import os
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes stdout
+        return 0

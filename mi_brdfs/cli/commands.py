@@ -1,0 +1,363 @@
+"""
+The ``mi-brdfs`` subcommands: one ``cmd_*`` function each, which takes the parsed arguments
+(:mod:`mi_brdfs.cli.parser`) and returns the exit status, and the helpers they share.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+EXIT_USER_ERROR = 2
+EXIT_INTERRUPTED = 130
+
+
+def _bsdfs(tokens):
+    from ..bsdfspec import load_bsdf, parse_cli
+
+    specs = parse_cli(tokens)
+    for spec in specs:
+        load_bsdf(spec)  # reject bad parameters before any long work, in one line
+    return specs
+
+
+def _thetas(text):
+    from ..errors import MiBrdfsError
+
+    if text is None:
+        return None
+    try:
+        values = [float(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise MiBrdfsError(f"--thetas expects degrees separated by commas, got '{text}'") from None
+    if not values or any(not 0 <= v <= 90 for v in values):
+        raise MiBrdfsError(f"--thetas: angles must lie in [0, 90] degrees, got '{text}'")
+    return values
+
+
+def cmd_check(args) -> int:
+    import json
+
+    import mi_brdfs
+    from ..bsdfspec import describe
+    from ..checks import format_table, run_battery
+
+    from ..imageio import check_writable
+
+    json_path = check_writable(args.json) if args.json else None
+    variant = mi_brdfs.use_variant(args.variant)
+    specs = _bsdfs(args.bsdf)
+    failed, report = 0, []
+    for spec in specs:
+        results = run_battery(spec, quick=args.quick, render=args.render,
+                              progress=not args.quiet)
+        failed += sum(not r.passed for r in results)
+        print(f"\n{describe(spec)} ({variant})")
+        print(format_table(results, messages=not args.quiet))
+        report.append({"bsdf": describe(spec), "variant": variant, "checks": [
+            {"name": r.name, "passed": r.passed, "value": r.value, "tolerance": str(r.tolerance),
+             "message": r.message} for r in results]})
+    if json_path:
+        from ..imageio import atomic_path
+        with atomic_path(json_path, ".json") as tmp:
+            with open(tmp, "w") as f:
+                json.dump(report, f, indent=1, default=float)
+    print(f"\n{failed} check(s) failed" if failed else "\nall checks passed")
+    return 1 if failed else 0
+
+
+def cmd_furnace(args) -> int:
+    import mi_brdfs
+    from ..bsdfspec import describe
+    from ..checks.albedo import DEFAULT_THETAS, albedo_curve
+    from ..checks.furnace import check_furnace
+    from ..imageio import check_writable, write_exr, write_png
+
+    variant = mi_brdfs.use_variant(args.variant)
+    specs = _bsdfs(args.bsdf)
+    thetas = _thetas(args.thetas) or DEFAULT_THETAS
+    out = check_writable(args.output) if args.render else None
+    for spec in specs:
+        curve = albedo_curve(spec, thetas, n=args.samples, progress=True)
+        print(f"\ndirectional albedo of {describe(spec)} ({variant}; brightest channel)")
+        print(curve.table())
+        for note in curve.notes:
+            print(f"note: {note}")
+    if args.render:
+        result = check_furnace(specs[0], spp=args.spp, res=args.res, n=args.samples)
+        r = result.details["render"]
+        meta = {"mi_brdfs.check": "white furnace", "furnace.bsdf": describe(specs[0]),
+                "furnace.mean": f"{r.mean:.6f}", "furnace.expected": str(r.expected),
+                "furnace.nonfinite": r.nonfinite, "render.variant": variant,
+                "render.spp": r.spp, "mi_brdfs.version": mi_brdfs.__version__}
+        write_exr(out, r.image, meta)
+        write_png(out.with_suffix(".png"), r.image)
+        print(f"\n{result.message}\nwrote {out} and {out.with_suffix('.png')}")
+        return 0 if result.passed else 1
+    return 0
+
+
+def cmd_plot(args) -> int:
+    import mi_brdfs
+    from .. import plots
+    from ..imageio import check_writable
+
+    mi_brdfs.use_variant(args.variant)
+    specs = _bsdfs(args.bsdf)
+    out = check_writable(args.output or f"{args.kind}.png")
+    thetas = _thetas(args.thetas)
+    if args.kind == "lobe":
+        plots.plot_lobe(specs, out, thetas or (0.0, 30.0, 60.0, 80.0), log=args.log,
+                        cosine=not args.no_cos)
+    elif args.kind == "albedo":
+        plots.plot_albedo(specs, out, thetas, n=args.samples)
+    else:
+        plots.plot_slice(specs, out, res=args.res)
+    print(f"wrote {out}")
+    return 0
+
+
+def cmd_render(args) -> int:
+    import mi_brdfs
+    from ..imageio import check_writable, write_exr, write_png
+    from ..render import render
+    from ..scenes import parse_defines, scene_path
+
+    path = scene_path(args.scene)
+    out = check_writable(Path(args.output) if args.output else Path.cwd() / f"{path.stem}.exr")
+    png = out.with_suffix(".png")
+    if not args.no_png:
+        check_writable(png)
+    defines = parse_defines(args.defines)
+    variant = mi_brdfs.use_variant(args.variant)
+
+    result = render(path, spp=args.spp, seed=args.seed, time_budget=args.time_budget,
+                    defines=defines, pass_spp=args.pass_spp, processes=args.processes,
+                    progress=not args.quiet)
+    write_exr(out, result.image, result.metadata())
+    written = [str(out)]
+    if not args.no_png:
+        write_png(png, result.image, exposure=args.exposure)
+        written.append(str(png))
+    h, w = result.image.shape[:2]
+    state = "interrupted after" if result.interrupted else "rendered"
+    print(f"{state} {result.spp} spp of {w}×{h} in {result.wall_time:.2f} s "
+          f"({variant}, {result.arrangement}); wrote {' and '.join(written)}")
+    return EXIT_INTERRUPTED if result.interrupted else 0
+
+
+def cmd_compare(args) -> int:
+    import mi_brdfs
+    from ..compare import compare, parse_swaps, write_outputs
+    from ..errors import MiBrdfsError
+    from ..imageio import check_writable
+    from ..scenes import parse_defines, scene_path
+
+    if len(args.scenes) > 2 or (len(args.scenes) == 1 and not args.swap):
+        raise MiBrdfsError("compare takes A.xml B.xml, or one scene with --swap ID=BSDF")
+    paths = [scene_path(s) for s in args.scenes]
+    out = check_writable(args.output)
+    swaps = parse_swaps(args.swap)
+    defines = parse_defines(args.defines)
+    mi_brdfs.use_variant(args.variant)
+    result = compare(paths[0], paths[1] if len(paths) > 1 else None, swap=swaps or None,
+                     spp=args.spp, seed=args.seed, defines=defines)
+    written = write_outputs(result, out)
+    print(result.summary())
+    for note in result.notes:
+        print(f"note: {note}")
+    print("wrote " + ", ".join(written))
+    return 0
+
+
+def _spec_tokens(tokens) -> list:
+    """Command-line BSDF tokens, a quoted 'plugin key=value ...' split into its words."""
+    import shlex
+
+    words = []
+    for token in tokens:
+        words += [token] if token.lstrip().startswith("<") else shlex.split(token)
+    return words
+
+
+def cmd_fit(args) -> int:
+    import mi_brdfs
+    from ..bsdfspec import parse_cli
+    from ..errors import MiBrdfsError
+    from ..fit import fit, plot_fit, write_json
+    from ..imageio import check_writable
+
+    json_path = check_writable(args.output) if args.output else None
+    plot_path = check_writable(args.plot) if args.plot else None
+    if plot_path:
+        from ..plots import pyplot
+        pyplot()  # matplotlib missing: say so before the fit
+    try:
+        target_tokens, model_tokens = _spec_tokens(args.target), _spec_tokens(args.model)
+    except ValueError as e:
+        raise MiBrdfsError(f"cannot read the BSDF: {e}") from None
+    mi_brdfs.use_variant(args.variant, fallback=False)
+    (target,), (model,) = _one_bsdf(parse_cli(target_tokens), "TARGET"), \
+        _one_bsdf(parse_cli(model_tokens), "--model")
+    result = fit(target, model, args.free, pairs=args.pairs, steps=args.steps, seed=args.seed,
+                 variant=args.variant, progress=not args.quiet)
+    print(result.summary())
+    written = []
+    if json_path:
+        written.append(write_json(result, json_path))
+    if plot_path:
+        written.append(plot_fit(result, plot_path))
+    if written:
+        print("wrote " + " and ".join(written))
+    return 0
+
+
+def cmd_simplify(args) -> int:
+    import mi_brdfs
+    from ..imageio import check_writable
+    from ..scenes import parse_defines, scene_path
+    from ..simplify import simplify
+
+    path = scene_path(args.scene)
+    out = check_writable(Path(args.output) if args.output
+                         else Path.cwd() / f"{path.stem}-simplified.xml")
+    defines = parse_defines(args.defines)
+    mi_brdfs.use_variant(args.variant)
+    result = simplify(path, args.tolerance, output=out, report=args.report, quick=args.quick,
+                      spp=args.spp, defines=defines, cache=not args.no_cache,
+                      confidence=args.confidence, progress=not args.quiet)
+    print(result.summary())
+    return 0
+
+
+def _one_bsdf(specs: list, what: str) -> list:
+    from ..errors import MiBrdfsError
+
+    if len(specs) != 1:
+        raise MiBrdfsError(f"{what} names {len(specs)} BSDFs; give one")
+    return specs
+
+
+def _report_folder(args, filename: str) -> Path:
+    """The report folder (created), checked writable for ``filename`` before any work."""
+    from ..imageio import output_folder
+
+    return output_folder(args.out, f"--out {args.out}", filename)
+
+
+def _jit_variant(what: str) -> str:
+    import mi_brdfs
+    from ..errors import MiBrdfsError
+
+    variant = mi_brdfs.use_variant(None)
+    if not variant.startswith(("llvm", "cuda")):
+        raise MiBrdfsError(f"{what} needs a JIT variant; {variant} is all this machine offers")
+    return variant
+
+
+def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) -> list:
+    """
+    Run a report's sections and print its verdict; the rows that are not as expected. With
+    ``quotes`` (a tag) and ``args.readme``, the figures the document quotes under that tag are
+    filled in from the run.
+    """
+    from ..campaign import Context, run
+    from ..campaign.core import fill_quotes
+    from ..errors import MiBrdfsError
+
+    readmes = getattr(args, "readme", None) or []
+    for readme in readmes:
+        if not Path(readme).is_file():
+            raise MiBrdfsError(f"--readme {readme}: no such file")
+    out = _report_folder(args, kwargs.get("filename", "REPORT.md"))
+    variant = _jit_variant(f"the {kwargs.get('title', 'report')}")
+    report, done, values = run(sections, Context(out=out, quick=args.quick, variant=variant),
+                               progress=not args.quiet, what=what, **kwargs)
+    rows = [r for s in done for r in s.rows]
+    failed = [r for r in rows if not r.ok]
+    if rows and not rows[0].judged:
+        print(f"wrote {report}: {len(rows)} {what}, not judged (quick run: "
+              f"{kwargs.get('quick_note', 'too small to judge')})")
+    else:
+        print(f"wrote {report}: {len(rows) - len(failed)} of {len(rows)} {what} as expected")
+    for r in failed:
+        print(f"  unexpected: {r.plugin}: {r.check}: {r.result} ({r.verdict})")
+    for readme in readmes if quotes else []:
+        count = fill_quotes(readme, values, quotes)
+        print(f"updated {readme}: {count} figures quoted from {report.name}")
+    return failed
+
+
+def cmd_audit(args) -> int:
+    import os
+    import time
+
+    from ..audit import grid, report, run
+    from ..errors import MiBrdfsError
+    from ..registry import use_variant
+
+    if not args.variant.startswith(("llvm_", "cuda_")):
+        raise MiBrdfsError(f"--variant {args.variant}: the audit needs a JIT variant (χ² runs "
+                           f"on mitsuba.chi2), e.g. llvm_ad_rgb")
+    out = _report_folder(args, "MITSUBA_AUDIT.md")
+    use_variant(args.variant, fallback=False)  # fail here, in one line, if it is unusable
+    cases = grid.all_cases()
+    if args.quick:
+        cases = [c for c in cases if c.quick]
+    if args.only:
+        names = {n.strip() for n in args.only.split(",") if n.strip()}
+        unknown = names - {c.bsdf for c in grid.all_cases()}
+        if unknown:
+            raise MiBrdfsError(f"--only {args.only}: no audit configuration for "
+                               f"{', '.join(sorted(unknown))} (the audit knows: "
+                               f"{', '.join(sorted({c.bsdf for c in grid.all_cases()}))})")
+        cases = [c for c in cases if c.bsdf in names]
+    t0 = time.perf_counter()
+    records = run.run(cases, args.variant, args.quick, out / "audit" / ".cache",
+                      processes=args.processes or min(os.cpu_count() or 1, 4),
+                      progress=not args.quiet)
+    command = "mi-brdfs audit" + (" --quick" if args.quick else "") + \
+        (f" --only {args.only}" if args.only else "")
+    md, js, counts = report.write(records, out, command, time.perf_counter() - t0,
+                                  args.variant, args.quick)
+    print(f"wrote {md} and {js}: " + ", ".join(f"{n} {v}" for v, n in sorted(counts.items())))
+    return 1 if counts.get("untriaged") else 0
+
+
+def cmd_validate(args) -> int:
+    from ..campaign import sections
+
+    return 1 if _run_report(args, sections(), "checks", quotes="report") else 0
+
+
+def cmd_bench(args) -> int:
+    from ..benchmark import sections
+
+    _run_report(args, sections(), "measurements", quotes="bench",
+                title="mi_brdfs speed vs accuracy",
+                filename="SPEED_ACCURACY.md", command="mi-brdfs bench", make_target="make bench",
+                quick_note="tiny renders whose timings are too short to judge the targets",
+                judge_quick=False)
+    return 0  # a benchmark reports targets met or missed; it does not fail
+
+
+def cmd_info(args) -> int:
+    import drjit as dr
+    import mitsuba as mi
+
+    import mi_brdfs
+    from .. import _env
+
+    status = _env.find_llvm()
+    print(f"mi_brdfs  {mi_brdfs.__version__}")
+    print(f"mitsuba   {mi.__version__}   drjit {dr.__version__}   python {sys.version.split()[0]}")
+    print(f"libLLVM   {status.path if status.ok else 'none that works'}"
+          + (f" (LLVM {'.'.join(map(str, status.version))})" if status.ok else ""))
+    for path, verdict in status.tried:
+        print(f"          tried {path}: {verdict}")
+    if not status.ok:
+        print(f"          {status.message}")
+    print(f"default   {mi_brdfs.default_variant()}")
+    print(f"variants  {', '.join(mi.variants())}")
+    print(f"plugins   {', '.join(mi_brdfs.PLUGINS)}")
+    return 0

@@ -1,0 +1,351 @@
+"""
+The ``mi-brdfs`` argument parser: one function per subcommand adds its arguments; argument
+types and errors in one line (``mi-brdfs: error: ...``, exit status 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from .commands import (
+    EXIT_USER_ERROR, cmd_audit, cmd_bench, cmd_check, cmd_compare, cmd_fit, cmd_furnace, cmd_info,
+    cmd_plot, cmd_render, cmd_simplify, cmd_validate,
+)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors: ``mi-brdfs: error: ...`` and exit status 2."""
+
+    def error(self, message):
+        command = self.prog.split()[-1] if " " in self.prog else None
+        where = f"{command}: " if command else ""
+        self.exit(EXIT_USER_ERROR, f"mi-brdfs: error: {where}{message} (see --help)\n")
+
+
+def _number(convert, what: str, valid, allowed: str):
+    """An argparse type: ``convert(text)``, which must satisfy ``valid``; else one line."""
+    def parse(text: str):
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"'{text}' is not {what}") from None
+        if not valid(value):
+            raise argparse.ArgumentTypeError(f"{allowed}, got {text}")
+        return value
+    return parse
+
+
+#: Counts (samples, resolution, processes), seeds, finite numbers, durations.
+_count = _number(int, "a whole number", lambda v: v >= 1, "must be at least 1")
+_seed = _number(int, "a whole number", lambda v: 0 <= v < 2**32, "must lie in [0, 2^32)")
+_finite = _number(float, "a number", math.isfinite, "must be finite")
+_seconds = _number(float, "a number", lambda v: math.isfinite(v) and v > 0,
+                   "must be finite and > 0 seconds")
+_positive = _number(float, "a number", lambda v: math.isfinite(v) and v > 0,
+                    "must be finite and > 0")
+
+
+def _output(*suffixes: str):
+    """An output path with one of ``suffixes`` (not empty, not a directory name)."""
+    def parse(text: str) -> str:
+        if not text.strip():
+            raise argparse.ArgumentTypeError("the output path is empty")
+        if text.endswith(("/", "\\")) or Path(text).suffix.lower() not in suffixes:
+            raise argparse.ArgumentTypeError(
+                f"'{text}' must end in {' or '.join(suffixes)}")
+        return text
+    return parse
+
+
+def _add_variant(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--variant", metavar="V",
+                   help="Mitsuba variant (default: llvm_ad_rgb where LLVM works, else scalar_rgb)")
+
+
+def _parser() -> argparse.ArgumentParser:
+    """The parser of ``mi-brdfs`` and its subcommands (each one's ``func``: its command)."""
+    from .. import __version__
+
+    parser = _Parser(
+        prog="mi-brdfs",
+        description="Lecture BRDFs (Lambert, Phong, Cook-Torrance) as Mitsuba 3 plugins: "
+                    "render, validate and compare them.")
+    parser.add_argument("--version", action="version", version=f"mi-brdfs {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+
+    _add_render(sub)
+    _add_check(sub)
+    _add_furnace(sub)
+    _add_plot(sub)
+    _add_compare(sub)
+    _add_fit(sub)
+    _add_simplify(sub)
+    _add_validate(sub)
+    _add_bench(sub)
+    _add_audit(sub)
+    _add_info(sub)
+    return parser
+
+
+def _add_render(sub) -> None:
+    """``mi-brdfs render``."""
+    r = sub.add_parser("render", help="render a scene progressively to EXR + PNG",
+                       description="Render a scene progressively (passes of independent seeds) "
+                                   "and write an EXR with the render's metadata plus an sRGB PNG "
+                                   "preview. Ctrl-C keeps and writes what is done.")
+    r.add_argument("scene", nargs="?", default="showcase",
+                   help="scene XML file or bundled scene name (default: showcase)")
+    r.add_argument("-o", "--output", metavar="OUT.exr", type=_output(".exr"),
+                   help="output EXR (default: ./<scene name>.exr); the PNG goes beside it")
+    r.add_argument("--spp", type=_count, metavar="N",
+                   help="samples per pixel (default: the scene's sampler; unlimited with "
+                        "--time-budget)")
+    _add_variant(r)
+    r.add_argument("--seed", type=_seed, default=0, metavar="S", help="base seed (default: 0)")
+    r.add_argument("--time-budget", type=_seconds, metavar="SECONDS",
+                   help="stop starting passes that would end after this many seconds")
+    r.add_argument("-D", dest="defines", action="append", default=[], metavar="name=value",
+                   help="override a <default> of the scene (repeatable)")
+    r.add_argument("--pass-spp", type=_count, metavar="N",
+                   help="samples per pixel in each pass")
+    r.add_argument("--processes", type=_count, metavar="N",
+                   help="render processes for scalar scenes with Python plugins, this one "
+                        "included (default: one per core when it pays)")
+    r.add_argument("--no-png", action="store_true", help="write no PNG preview")
+    r.add_argument("--exposure", type=_finite, default=0.0,
+                   help="PNG exposure in stops (default 0)")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=cmd_render)
+
+
+#: The help of the BSDF arguments of check, furnace and plot.
+_BSDF_HELP = ("one or more BSDFs: a plugin name followed by its key=value parameters "
+              "(e.g. roughconductor alpha=0.3 material=Au diffuse), an XML file, or a "
+              "quoted XML fragment")
+
+
+def _bsdf_command(sub, name, summary, description, *before):
+    """A subcommand taking BSDFs (after the positional arguments ``before``)."""
+    cmd = sub.add_parser(name, help=summary, description=description)
+    for args, kwargs in before:
+        cmd.add_argument(*args, **kwargs)
+    cmd.add_argument("bsdf", nargs="+", metavar="BSDF", help=_BSDF_HELP)
+    _add_variant(cmd)
+    return cmd
+
+
+def _add_check(sub) -> None:
+    """``mi-brdfs check``."""
+    c = _bsdf_command(sub, "check", "run every check on one or more BSDFs",
+                      "Run the whole battery (consistency, χ² sampling, energy, albedo "
+                      "agreement, reciprocity, positivity, stability; optionally the furnace "
+                      "render) and print a table. Exit status 1 when a check fails.")
+    c.add_argument("--quick", action="store_true", help="10× fewer samples")
+    c.add_argument("--render", action="store_true", help="also render the white furnace")
+    c.add_argument("--json", metavar="FILE", type=_output(".json"),
+                   help="also write the results as JSON")
+    c.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no messages")
+    c.set_defaults(func=cmd_check)
+
+
+def _add_furnace(sub) -> None:
+    """``mi-brdfs furnace``."""
+    f = _bsdf_command(sub, "furnace", "directional albedo table; optionally the furnace render",
+                      "Directional albedo E(θ) over incident angles by every estimator (sample() "
+                      "weights ± error, eval() Monte Carlo, quadrature, float64 reference), and "
+                      "with --render the white furnace image (EXR + PNG).")
+    f.add_argument("--thetas", metavar="DEG,...", help="incident angles in degrees")
+    f.add_argument("-n", "--samples", type=_count, metavar="N", help="samples per angle")
+    f.add_argument("--render", action="store_true", help="render the furnace (first BSDF)")
+    f.add_argument("-o", "--output", metavar="OUT.exr", default="furnace.exr",
+                   type=_output(".exr"),
+                   help="furnace image (default: ./furnace.exr)")
+    f.add_argument("--spp", type=_count, default=128, help="furnace spp (default 128)")
+    f.add_argument("--res", type=_count, default=64, help="furnace resolution (default 64)")
+    f.set_defaults(func=cmd_furnace)
+
+
+def _add_plot(sub) -> None:
+    """``mi-brdfs plot``."""
+    pl = _bsdf_command(sub, "plot", "lobe, albedo or (θh, θd) slice plots (PNG)",
+                       "Plots like Disney's BRDF Explorer: 'lobe' (polar, plane of incidence, "
+                       "several incident angles), 'albedo' (E(θ)), 'slice' (f over θh, θd at "
+                       "φd = 90°). Several BSDFs share one figure.",
+                       (("kind",), {"choices": ["lobe", "albedo", "slice"]}))
+    pl.add_argument("-o", "--output", metavar="OUT.png", type=_output(".png", ".pdf", ".svg"),
+                    help="default: ./<kind>.png")
+    pl.add_argument("--thetas", metavar="DEG,...", help="incident angles (lobe, albedo)")
+    pl.add_argument("--log", action="store_true", help="logarithmic radius (lobe)")
+    pl.add_argument("--no-cos", action="store_true", help="plot f instead of f·cosθo (lobe)")
+    pl.add_argument("--res", type=_count, default=128, help="slice resolution (default 128)")
+    pl.add_argument("-n", "--samples", type=_count, metavar="N",
+                    help="samples per angle (albedo)")
+    pl.set_defaults(func=cmd_plot)
+
+
+def _add_compare(sub) -> None:
+    """``mi-brdfs compare``."""
+    cp = sub.add_parser("compare", help="A | B | difference | FLIP of two renders + noise floor",
+                        description="Render two scenes (or one scene and the same scene with a "
+                                    "material swapped) with the same spp and seed, and write one "
+                                    "figure A | B | signed difference | FLIP error map plus the "
+                                    "EXRs, with RMSE, relative MSE, mean FLIP and the noise floor "
+                                    "(the same numbers between two seeds of A).")
+    cp.add_argument("scenes", nargs="+", metavar="SCENE", help="A.xml [B.xml] (or bundled names)")
+    cp.add_argument("--swap", action="append", default=[], metavar="ID=BSDF",
+                    help="B = A with <bsdf id=ID> replaced, e.g. "
+                         "--swap \"material=roughconductor alpha=0.3\" (repeatable)")
+    _add_variant(cp)
+    cp.add_argument("--spp", type=_count, default=64, help="samples per pixel (default 64)")
+    cp.add_argument("--seed", type=_seed, default=0)
+    cp.add_argument("-D", dest="defines", action="append", default=[], metavar="name=value",
+                    help="override a <default> of the scene(s) (repeatable)")
+    cp.add_argument("-o", "--output", metavar="OUT.png", default="compare.png",
+                    type=_output(".png"),
+                    help="figure (default ./compare.png); EXRs beside it")
+    cp.set_defaults(func=cmd_compare)
+
+
+def _add_fit(sub) -> None:
+    """``mi-brdfs fit``."""
+    ft = sub.add_parser("fit", help="fit a model's parameters to another BSDF (JSON, plot)",
+                        description="Fit the continuous parameters of MODEL (those of --free, "
+                                    "default all) so that its f·cosθo matches TARGET's over "
+                                    "direction pairs covering the hemisphere and grazing angles, "
+                                    "by automatic differentiation (Adam, cube-root objective; see "
+                                    "mi_brdfs.fit). Prints the fitted values, the residual, the "
+                                    "albedo error and the fitted BSDF as a command line and XML.")
+    ft.add_argument("target", nargs="+", metavar="TARGET",
+                    help="the BSDF to match: a plugin name followed by its key=value parameters "
+                         "(e.g. cooktorrance material=Au alpha=0.2), a built-in, an XML file or "
+                         "a quoted XML fragment")
+    ft.add_argument("--model", nargs="+", required=True, metavar="MODEL",
+                    help="the model to fit: a plugin name with key=value parameters (its values "
+                         "are the start; those not in --free stay fixed), e.g. --model phong "
+                         "lobe=halfway diffuse_reflectance=0")
+    ft.add_argument("--free", metavar="P1,P2,...",
+                    help="the parameters to fit, by name (default: all of MODEL's continuous ones)")
+    ft.add_argument("-o", "--output", metavar="FIT.json", type=_output(".json"),
+                    help="write the result as JSON")
+    ft.add_argument("--plot", metavar="FIT.png", type=_output(".png", ".pdf", ".svg"),
+                    help="plot target against fit: lobes in the plane of incidence and E(θ)")
+    ft.add_argument("--variant", metavar="V", default="llvm_ad_rgb",
+                    help="Mitsuba variant with automatic differentiation (default: llvm_ad_rgb)")
+    ft.add_argument("--pairs", type=_count, default=16384, metavar="N",
+                    help="direction pairs drawn (default 16384; about 3/4 lie above the horizon)")
+    ft.add_argument("--steps", type=_count, default=800, metavar="N",
+                    help="Adam steps per start (default 800)")
+    ft.add_argument("--seed", type=_seed, default=0, metavar="S",
+                    help="seed of the direction pairs (default: 0)")
+    ft.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    ft.set_defaults(func=cmd_fit)
+
+
+def _add_simplify(sub) -> None:
+    """``mi-brdfs simplify``."""
+    sm = sub.add_parser("simplify", help="cheaper materials within a tolerance: table, plot, "
+                                         "simplified scene",
+                        description="For every BSDF of SCENE, render cheaper candidates (switches "
+                                    "of the plugins, the built-in with the same model, fitted "
+                                    "cheaper models) in the scene itself; measure each one's bias "
+                                    "against the original (relative RMSE, 2 to 16 seeds, common "
+                                    "random numbers), its cost per sample and variance, and so "
+                                    "its time to reach the tolerance; write the scene with each "
+                                    "material replaced by its cheapest candidate within the "
+                                    "tolerance (every other byte kept) and verify it by one more "
+                                    "render (see mi_brdfs.simplify).")
+    sm.add_argument("scene", metavar="SCENE", help="scene XML file or bundled scene name")
+    sm.add_argument("--tolerance", type=_positive, default=0.01, metavar="T",
+                    help="relative RMSE of the converged image against the original's "
+                         "(RMSE over the mean; default 0.01)")
+    _add_variant(sm)
+    sm.add_argument("-o", "--output", metavar="SIMPLIFIED.xml", type=_output(".xml"),
+                    help="the simplified scene (default: ./<scene name>-simplified.xml)")
+    sm.add_argument("--report", metavar="DIR",
+                    help="write SIMPLIFY.md and simplify.png there (and keep the cache in "
+                         "DIR/cache)")
+    sm.add_argument("--quick", action="store_true",
+                    help="small renders (-D res=128 where the scene declares res, 16 spp) and "
+                         "short fits")
+    sm.add_argument("--spp", type=_count, metavar="N",
+                    help="samples per pixel of each render (default 64; --quick: 16)")
+    sm.add_argument("-D", dest="defines", action="append", default=[], metavar="name=value",
+                    help="override a <default> of the scene (repeatable)")
+    sm.add_argument("--confidence", type=_finite, default=2.0, metavar="Z",
+                    help="standard errors by which a candidate's speed-up must exceed 1 to "
+                         "replace a material (default 2; 0: any estimated gain)")
+    sm.add_argument("--no-cache", action="store_true", help="measure everything again")
+    sm.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    sm.set_defaults(func=cmd_simplify)
+
+
+def _report_command(sub, name, summary, description, quick, target, tag):
+    """A subcommand that writes a report into --out (and quotes into --readme)."""
+    cmd = sub.add_parser(name, help=summary, description=description)
+    cmd.add_argument("--quick", action="store_true", help=quick)
+    cmd.add_argument("--out", metavar="DIR", default=".",
+                     help=f"report folder (default: the current directory; {target}: "
+                          f"validation)")
+    cmd.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    cmd.add_argument("--readme", metavar="FILE", action="append",
+                     help=f"also fill in the figures FILE quotes from the run, each marked "
+                          f"<!-- {tag}: KEY -->VALUE<!-- /{tag} --> (repeatable; {target}: "
+                          f"README.md and docs/*.md)")
+    return cmd
+
+
+def _add_validate(sub) -> None:
+    """``mi-brdfs validate``."""
+    v = _report_command(sub, "validate", "the validation campaign: REPORT.md with figures",
+                        "Run every check on every plugin over its parameter grid, the "
+                        "comparisons with Mitsuba's built-ins and the lecture notes' claims, and "
+                        "write REPORT.md with its figures.",
+                        "CI-sized: fewer samples and parameters", "make validate", "report")
+    v.set_defaults(func=cmd_validate)
+
+
+def _add_bench(sub) -> None:
+    """``mi-brdfs bench``."""
+    b = _report_command(sub, "bench", "speed vs accuracy: SPEED_ACCURACY.md with plots",
+                        "Measure every plugin and sampling choice against the built-ins (ratios "
+                        "of medians of interleaved repeats, error against time) and write "
+                        "SPEED_ACCURACY.md with its plots. Run it on a quiet machine; it asserts "
+                        "nothing.", "tiny sizes (a smoke run; its timings are not judged)",
+                        "make bench", "bench")
+    b.set_defaults(func=cmd_bench)
+
+
+def _add_audit(sub) -> None:
+    """``mi-brdfs audit``."""
+    au = sub.add_parser(
+        "audit", help="every BSDF Mitsuba ships through the checks: MITSUBA_AUDIT.md",
+        description="Run every BSDF plugin of the installed Mitsuba (and the package's) over a "
+                    "grid of configurations through the whole battery of checks and Mitsuba's "
+                    "own χ² harness, in worker processes, and write MITSUBA_AUDIT.md and "
+                    "audit/findings.json with a triaged verdict for every failure. Results are "
+                    "cached per case in OUT/audit/.cache: an interrupted audit resumes. Exit "
+                    "status 1 when a failure has no verdict yet.")
+    au.add_argument("--quick", action="store_true",
+                    help="a few configurations, 10× fewer samples (the test suite's run; writes "
+                         "MITSUBA_AUDIT-quick.md)")
+    au.add_argument("--out", metavar="DIR", default=".",
+                    help="report folder (default: the current directory; make audit: "
+                         "validation)")
+    au.add_argument("--variant", metavar="V", default="llvm_ad_rgb",
+                    help="JIT variant of the audit (default llvm_ad_rgb; polarized BSDFs run in "
+                         "llvm_ad_spectral_polarized)")
+    au.add_argument("--processes", type=_count, default=None, metavar="N",
+                    help="worker processes (default: one per core)")
+    au.add_argument("--only", metavar="BSDF[,BSDF]",
+                    help="audit only these plugins (by name as in XML)")
+    au.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    au.set_defaults(func=cmd_audit)
+
+
+def _add_info(sub) -> None:
+    """``mi-brdfs info``."""
+    i = sub.add_parser("info", help="versions, variants, LLVM status and registered plugins")
+    i.set_defaults(func=cmd_info)
