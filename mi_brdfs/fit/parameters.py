@@ -1,0 +1,294 @@
+"""
+The models' parameterisations: which parameters of a model are fitted (the continuous ones
+``mi.traverse`` exposes and the plugin takes by that name), the variable each is fitted in and
+its range (:class:`Parameter`), the model as fitted and written back, and the closed-form
+starts of a lobe width (see :mod:`mi_brdfs.fit`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import MiBrdfsError
+from .spec import _number, _plain, _rgb, spec_text
+
+#: Widths of a lobe: one number each, fitted in log space.
+WIDTHS = ("alpha", "alpha_u", "alpha_v", "exponent")
+
+#: Parameters with the spectrum's channels (fitted per RGB channel) among texture-valued ones.
+_SPECTRAL_NAMES = ("eta", "k", "base_color")
+
+#: Beckmann-type plugins whose ``alpha`` is the lobe width (built-ins included).
+_MICROFACET = ("cooktorrance", "roughconductor", "roughplastic", "roughdielectric", "ward")
+
+
+def _bounds(name: str):
+    """(transform, lower, upper) of parameter ``name`` (see :mod:`mi_brdfs.fit`)."""
+    if name in ("alpha", "alpha_u", "alpha_v"):
+        return "log", 1e-3, 2.0
+    if name == "exponent":
+        return "log", 1e-2, 1e6
+    if name == "eta":
+        return "fresnel", 0.0, 1e3
+    if name == "k":
+        return "log1p", 0.0, 1e3
+    if name == "sigma":
+        return "square", 1e-3, math.pi / 2
+    if name.endswith(("reflectance", "transmittance")):
+        return "linear", 0.0, 1.0
+    return "linear", 0.0, math.inf
+
+
+@dataclass
+class Parameter:
+    """A free parameter: its spec name, ``mi.traverse`` key, channels and reparametrisation."""
+
+    name: str
+    key: str
+    channels: int
+    transform: str
+    lo: float
+    hi: float
+
+    def encode(self, value: np.ndarray) -> np.ndarray:
+        """The optimised variable x of a parameter value (clamped into the range first)."""
+        v = np.clip(np.asarray(value, dtype=np.float64), self.lo, self.hi)
+        if self.transform == "log":
+            return np.log(v)
+        if self.transform == "log1p":
+            return np.log1p(v)
+        if self.transform == "fresnel":
+            return (v - 1.0) / (v + 1.0)
+        if self.transform == "square":
+            return v * v
+        return v
+
+    def decode(self, x):
+        """The parameter value of x (drjit or NumPy)."""
+        import drjit as dr
+
+        exp = dr.exp if not isinstance(x, np.ndarray) else np.exp
+        if self.transform == "log":
+            return exp(x)
+        if self.transform == "log1p":
+            return exp(x) - 1.0
+        if self.transform == "fresnel":
+            return (1.0 + x) / (1.0 - x)
+        if self.transform == "square":
+            return (dr.sqrt if not isinstance(x, np.ndarray) else np.sqrt)(x)
+        return x
+
+    def x_range(self):
+        """The range of x: the transformed range of the parameter."""
+        return float(self.encode(self.lo)), float(self.encode(self.hi))
+
+    def drjit(self, x: np.ndarray):
+        """x as the type ``mi.traverse`` holds (Float or Color3f)."""
+        import mitsuba as mi
+
+        x = np.asarray(x, dtype=np.float32).ravel()
+        if self.channels == 1:
+            return mi.Float(float(x[0]))
+        return mi.Color3f(*[float(c) for c in x])
+
+
+# -------------------------------------------------------------------------------------------------
+# Parameters of a model
+# -------------------------------------------------------------------------------------------------
+
+
+def _fittable(bsdf) -> dict:
+    """{spec name: (traverse key, value as float64 array)} of the continuous parameters."""
+    import drjit as dr
+    import mitsuba as mi
+
+    params = mi.traverse(bsdf)
+    found = {}
+    for key in params.keys():  # (iterating SceneParameters yields (key, value) pairs)
+        value = params[key]
+        if params.flags(key) & int(mi.ParamFlags.NonDifferentiable):
+            continue
+        if not (dr.is_array_v(value) and dr.is_float_v(value)) or dr.width(value) != 1:
+            continue  # Python floats, strings, bitmaps (a ``.data`` tensor) are not fitted
+        name = key.removesuffix(".value")
+        if "." in name:
+            continue  # a parameter of a nested texture or BSDF
+        array = np.array(value, dtype=np.float64).ravel()
+        if array.size not in (1, 3):
+            continue
+        found[name] = (key, array)
+    return found
+
+
+def _spectral(name: str, key: str) -> bool:
+    """Whether a texture-valued parameter has spectrum channels (fitted per RGB channel)."""
+    return key.endswith(".value") and (name.endswith(("reflectance", "transmittance"))
+                                       or name in _SPECTRAL_NAMES)
+
+
+def _free_names(free, available: dict, model) -> list[str]:
+    """The free parameters asked for (a list or 'a,b'; None: all), checked against ``available``."""
+    if free is None:
+        names = list(available)
+    else:
+        if isinstance(free, str):
+            free = free.split(",")
+        names = []
+        for name in free:
+            name = str(name).strip()
+            name = name.removesuffix(".value")
+            if name and name not in names:
+                names.append(name)
+        unknown = [n for n in names if n not in available]
+        if unknown:
+            allowed = ", ".join(available) or "none"
+            hint = ""
+            if any(n.endswith("reflectance") for n in unknown):
+                hint = (" (a lobe whose reflectance is 0 or left at a default of 0 has no "
+                        "parameters: give it a value > 0 in MODEL to fit it)")
+            raise MiBrdfsError(f"--free {','.join(unknown)}: not a continuous parameter of "
+                               f"{spec_text(model)}; it has: {allowed}{hint}")
+    if not names:
+        raise MiBrdfsError(f"{spec_text(model)} has no free parameter to fit (its continuous "
+                           f"parameters: {', '.join(available) or 'none'})")
+    return names
+
+
+def _prepare_model(model: dict, free) -> tuple[dict, list[str]]:
+    """
+    The model dict to fit (spectral free parameters promoted to RGB; ``eta`` and ``k`` written
+    out, and ``material`` dropped, when one of them is free) and the free names.
+    """
+    from ..bsdfspec import load_bsdf
+
+    available = _accepted(model, _fittable(load_bsdf(model)))
+    names = _free_names(free, available, model)
+    spec = dict(model)
+    if ("eta" in names or "k" in names) and "eta" in available and "k" in available:
+        spec.pop("material", None)  # the written spec must hold the values the fit started from
+        for name in ("eta", "k"):
+            if name not in spec and _spectral(name, available[name][0]):
+                spec[name] = _plain(available[name][1])
+    for name in names:
+        key, value = available[name]
+        if _spectral(name, key):
+            spec[name] = _rgb(value)
+    return spec, names
+
+
+def _accepted(model: dict, available: dict) -> dict:
+    """
+    The parameters of ``available`` that the plugin takes under that name in a spec: a traverse
+    key need not be one (``roughplastic`` exposes ``eta`` but takes ``int_ior``/``ext_ior``).
+    Those absent from ``model`` are tried all together, else one by one (``eta`` with ``k``).
+    """
+    from ..bsdfspec import load_bsdf
+
+    def loads(names) -> bool:
+        try:
+            load_bsdf(dict(model, **{n: _plain(available[n][1]) for n in names}))
+        except MiBrdfsError:
+            return False
+        return True
+
+    missing = [n for n in available if n not in model]
+    if missing and not loads(missing):
+        groups = [[n] for n in missing if n not in ("eta", "k")]
+        groups.append([n for n in missing if n in ("eta", "k")])
+        missing = [n for group in groups if group and loads(group) for n in group]
+    return {n: v for n, v in available.items() if n in model or n in missing}
+
+
+def _parameters(bsdf, names: list[str]) -> tuple[list[Parameter], dict]:
+    """The free parameters ``names`` of the loaded model, and their values {name: array}."""
+    available = _fittable(bsdf)
+    params = []
+    for name in names:
+        key, value = available[name]
+        params.append(Parameter(name, key, value.size, *_bounds(name)))
+    given = {name: available[name][1] for name in names}
+    return params, given
+
+
+def _written(params: list[Parameter], values: dict, spec: dict) -> tuple[dict, dict]:
+    """(fitted spec, {name: float or [r, g, b]}): the values in the form the spec takes."""
+    spec, out = dict(spec), {}
+    for p in params:
+        v = np.clip(values[p.name], p.lo, p.hi)
+        if p.channels == 1 or np.all(v == v[0]):
+            out[p.name] = spec[p.name] = _number(v[0])
+        else:
+            out[p.name] = [_number(c) for c in v]
+            spec[p.name] = {"type": "rgb", "value": out[p.name]}
+    return spec, out
+
+
+# -------------------------------------------------------------------------------------------------
+# Closed-form starts
+# -------------------------------------------------------------------------------------------------
+
+
+def _scalar(values: dict, name: str):
+    return float(np.mean(values[name][1])) if name in values else None
+
+
+def beckmann_width(spec, values: dict | None = None):
+    """
+    The Beckmann roughness α equivalent to the lobe of ``spec`` (a dict), or None: α itself for
+    microfacet models and Ward (√(αu·αv) when anisotropic), √(2/(n+2)) for a halfway Phong lobe of
+    exponent n (Walter et al. 2007, §5.2), and that of exponent 4n for a mirror lobe.
+    """
+    from ..bsdfspec import load_bsdf
+
+    if not isinstance(spec, dict):
+        return None
+    values = values if values is not None else _fittable(load_bsdf(spec))
+    kind = spec["type"]
+    if kind in _MICROFACET:
+        if "alpha" in values:
+            return _scalar(values, "alpha")
+        if "alpha_u" in values and "alpha_v" in values:
+            return math.sqrt(_scalar(values, "alpha_u") * _scalar(values, "alpha_v"))
+        return None
+    if kind == "phong" and "exponent" in values:
+        n = _scalar(values, "exponent")
+        n_halfway = n if spec.get("lobe", "mirror") == "halfway" else 4 * n
+        return math.sqrt(2.0 / (n_halfway + 2.0))
+    return None
+
+
+def _width_start(spec: dict, names: list[str], alpha: float) -> dict:
+    """{name: value} of the model's free width parameters for a Beckmann roughness α."""
+    kind, start = spec["type"], {}
+    for name in names:
+        if name in ("alpha", "alpha_u", "alpha_v") and kind in _MICROFACET:
+            start[name] = alpha
+        elif name == "exponent" and kind == "phong":
+            n = 2.0 / alpha ** 2 - 2.0
+            start[name] = n if spec.get("lobe", "mirror") == "halfway" else n / 4
+    return start
+
+
+def _starts(starts: str, spec: dict, names: list[str], given: dict, target, target_bsdf) -> dict:
+    """
+    {label: {name: value}}: the starts of the fit, MODEL's values and, with ``starts='auto'``,
+    the closed-form width mapping from the target's lobe or else the given widths ÷ and × 4.
+    """
+    candidates = {"given": given}
+    width_names = [n for n in names if n in WIDTHS]
+    if starts == "auto" and width_names:
+        alpha = beckmann_width(target if isinstance(target, dict) else None,
+                               _fittable(target_bsdf))
+        mapped = _width_start(spec, width_names, alpha) if alpha else {}
+        if mapped:
+            candidates["closed form (Walter et al. 2007)"] = dict(given, **{
+                n: np.broadcast_to(v, given[n].shape) for n, v in mapped.items()})
+        else:
+            for label, factor in (("widths ÷ 4", 0.25), ("widths × 4", 4.0)):
+                candidates[label] = dict(given, **{
+                    n: given[n] * (factor if n != "exponent" else 1 / factor)
+                    for n in width_names})
+    return candidates
