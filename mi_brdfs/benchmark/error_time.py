@@ -89,9 +89,9 @@ def time_to(rows, who: str, reference_spp: int, target: float = 0.01) -> float:
     Seconds for one render to reach ``target`` relative RMSE. Each render's squared error is
     σ²(1/spp + 1/spp_ref), σ² the noise variance per sample (the reference being a noisy
     estimate too), so each is an independent estimate of σ², and their mean is the one used:
-    from the largest spp alone, the V-cavity's showcase ratio ranged 1.02–1.13 over runs while
-    its errors at the seven spp lay on both sides of the built-in's. The spp needed is
-    σ²/target². The time of a render of that many spp is the least-squares line
+    from the largest spp alone, the V-cavity's showcase ratio varied from run to run by more than
+    its distance from 1, while its errors at the seven spp lay on both sides of the built-in's.
+    The spp needed is σ²/target². The time of a render of that many spp is the least-squares line
     time = a + b·spp through the measured renders (a holds the per-render cost: JIT tracing,
     kernel launch, film development).
     """

@@ -24,8 +24,9 @@ from . import batch
 from .result import CheckResult
 
 #: Relative tolerance of the comparisons: float32 arithmetic in a few dozen operations. Our
-#: plugins compute sample, eval and pdf from the same terms (≈1e-7–2e-6); Mitsuba's roughconductor
-#: reaches 2e-6 (its sample() and pdf() evaluate D and G1 separately).
+#: plugins compute sample, eval and pdf from the same terms and agree to float32 rounding;
+#: Mitsuba's roughconductor differs somewhat more (its sample() and pdf() evaluate D and G1
+#: separately), still far below this tolerance.
 RTOL = 1e-3
 
 
@@ -103,7 +104,28 @@ def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = R
     produced = np.any(s.weight != 0, axis=1)
     valid = produced & ~delta
     details.update(produced=int(produced.sum()), delta=int((produced & delta).sum()))
+    finite = valid & ~_invalid_samples(s, wi, n, produced, problems)
+    worst = _sample_mismatch(bsdf, s, e, wi, finite, rtol, ctx, seed, problems, details)
 
+    positive_pdf_zero = finite & (s.pdf <= 0)
+    if positive_pdf_zero.any():
+        problems.append(f"{int(positive_pdf_zero.sum())} samples with a weight but bs.pdf = 0")
+    worst = max(worst, _eval_pdf_mismatch(bsdf, rng, wi, n, rtol, ctx, problems, details))
+    _check_sampled_flags(bsdf, s, produced, problems)
+
+    passed = not problems
+    summary = (f"{int(finite.sum())} weighted samples, max relative error {worst:.2g}"
+               + (f" ({details['conditioned']} within the float32 conditioning of their "
+                  f"directions)" if details["conditioned"] else "")
+               + (f", {details['delta']} delta samples skipped" if details["delta"] else ""))
+    msg = f"consistency: {describe(spec)}: " + (summary if passed else "; ".join(problems))
+    return CheckResult("consistency", passed, worst, rtol, msg, details)
+
+
+def _invalid_samples(s, wi: np.ndarray, n: int, produced: np.ndarray,
+                     problems: list) -> np.ndarray:
+    """The samples that succeeded with a NaN, Inf or negative weight or pdf (a problem each,
+    and one when no sample succeeded)."""
     # Only samples that succeeded are judged: a failed one (weight 0) leaves bs.wo and bs.pdf
     # undefined by the API (Mitsuba's samplers return e.g. negative pdfs there).
     bad_value = produced & (~np.isfinite(s.weight).all(axis=1) | ~np.isfinite(s.pdf) |
@@ -116,8 +138,17 @@ def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = R
         problems.append(f"{int(bad_value.sum())} samples with a NaN/Inf/negative weight or pdf "
                         f"(first: wi={np.round(wi[i], 4).tolist()}, weight={s.weight[i].tolist()}, "
                         f"pdf={s.pdf[i]:g})")
-    finite = valid & ~bad_value
+    return bad_value
 
+
+def _sample_mismatch(bsdf, s, e, wi: np.ndarray, finite: np.ndarray, rtol: float, ctx,
+                     seed: int, problems: list, details: dict) -> float:
+    """
+    bs.pdf against pdf(bs.wo) and the weight against eval/pdf at the ``finite`` samples, each
+    within ``rtol`` or, where larger, the float32 conditioning of the directions: the largest
+    relative error (problems and details filled in).
+    """
+    n = len(wi)
     pdf_err = np.where(finite, _rel(s.pdf, e.pdf), 0.0)
     ratio = e.value / np.where(e.pdf > 0, e.pdf, np.inf)[:, None]
     weight_err = np.where(finite[:, None], _rel(s.weight, ratio), 0.0).max(axis=1)
@@ -143,21 +174,26 @@ def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = R
                 f"{int(finite.sum())} samples (worst: wi={np.round(wi[i], 4).tolist()}, "
                 f"wo={np.round(s.wo[i], 4).tolist()}, weight={s.weight[i, 0]:.6g}, "
                 f"eval/pdf={ratio[i, 0]:.6g}, bs.pdf={s.pdf[i]:.6g}, pdf={e.pdf[i]:.6g})")
+    return worst
 
-    positive_pdf_zero = finite & (s.pdf <= 0)
-    if positive_pdf_zero.any():
-        problems.append(f"{int(positive_pdf_zero.sum())} samples with a weight but bs.pdf = 0")
 
-    # eval_pdf against eval and pdf, at pairs covering the whole sphere (below the horizon too)
+def _eval_pdf_mismatch(bsdf, rng, wi: np.ndarray, n: int, rtol: float, ctx, problems: list,
+                       details: dict) -> float:
+    """eval_pdf against eval and pdf, at pairs covering the whole sphere (below the horizon
+    too): the largest relative difference."""
     wo = batch.random_directions(rng, n, sphere=True)
     pairs = batch.evaluate(bsdf, wi, wo, ctx)
     ep = max(float(_rel(pairs.value, pairs.eval_pdf_value).max(initial=0)),
              float(_rel(pairs.pdf, pairs.eval_pdf_pdf).max(initial=0)))
     details["max_rel_eval_pdf"] = ep
-    worst = max(worst, ep)
     if ep > rtol:
         problems.append(f"eval_pdf() differs from (eval(), pdf()) by {ep:.3g} relative")
+    return ep
 
+
+def _check_sampled_flags(bsdf, s, produced: np.ndarray, problems: list) -> None:
+    """bs.sampled_type among the BSDF's flags and those of bs.sampled_component (a problem
+    when not)."""
     flags = int(bsdf.flags())
     kinds = s.sampled_type[produced]
     comps = s.sampled_component[produced]
@@ -171,11 +207,3 @@ def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = R
                         f"({int(empty.sum())} empty, {int(foreign.sum())} not in flags(), "
                         f"{int(out_of_range.sum())} components out of range, "
                         f"{int(wrong_comp.sum())} not in flags(component))")
-
-    passed = not problems
-    summary = (f"{int(finite.sum())} weighted samples, max relative error {worst:.2g}"
-               + (f" ({details['conditioned']} within the float32 conditioning of their "
-                  f"directions)" if details["conditioned"] else "")
-               + (f", {details['delta']} delta samples skipped" if details["delta"] else ""))
-    msg = f"consistency: {describe(spec)}: " + (summary if passed else "; ".join(problems))
-    return CheckResult("consistency", passed, worst, rtol, msg, details)

@@ -16,7 +16,8 @@ from . import batch
 from .result import CheckResult
 
 #: Relative asymmetry tolerated: float32 evaluation of the same expression with the two
-#: directions swapped (measured ≤ 2e-6 for our reciprocal models and Mitsuba's microfacets).
+#: directions swapped (for our reciprocal models and Mitsuba's microfacets, rounding far below
+#: this).
 RTOL = 1e-4
 
 #: ... plus CONDITIONING·ε₃₂/min(cosθa, cosθb)² near grazing, where a BSDF that computes an
