@@ -123,7 +123,8 @@ def reference_conditioning(f, wi, wo):
 
 
 #: A difference within this many times the conditioning (:func:`reference_conditioning`) is
-#: rounding; the checks use the same factor (:data:`mi_brdfs.checks.consistency.CONDITIONING_FACTOR`).
+#: rounding; the checks use the same factor
+#: (:data:`mi_brdfs.checks.consistency.CONDITIONING_FACTOR`).
 CONDITIONING_FACTOR = 8.0
 
 

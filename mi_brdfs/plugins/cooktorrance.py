@@ -260,7 +260,7 @@ class CookTorrance(mi.BSDF):
     exact dielectric Fresnel term with total internal reflection. Sampling draws h (visible
     normals of ωi turned to the normal's side, or D·cosθh with Walter's widened α), then
     reflects with probability F and refracts otherwise; the pdf carries F or 1 − F and the
-    Jacobian η² |ωo·h| / (ωi·h + η ωo·h)² (Walter eq. 17). ``shadowing`` must be ``smith``
+    Jacobian η² abs(ωo·h) / (ωi·h + η ωo·h)² (Walter eq. 17). ``shadowing`` must be ``smith``
     (its default then): Smith's Λ is defined on both sides of the surface, whereas the
     V-cavity masking of Cook & Torrance 1982 is derived for light above the surface, and
     the joint masking of a refracted pair of directions is not given there. ``fresnel``

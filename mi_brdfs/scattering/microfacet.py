@@ -24,13 +24,14 @@ G1(v, m) = χ⁺(v·m / v·n) / (1 + Λ(v)) with, for a = 1 / (α tanθv),
 
 (Walter eqs. 27 and 34; Heitz 2014, "Understanding the Masking-Shadowing Function", eqs. 72
 and 86). Mitsuba 3 replaces the Beckmann G1 by Walter's rational approximation (eq. 27,
-< 0.35 % error): :func:`smith_g1_mitsuba` reproduces it, for fidelity with ``roughconductor``.
+< 0.35 % error): :meth:`Distribution.smith_g1_mitsuba` reproduces it, for fidelity with
+``roughconductor``.
 The V-cavity masking (Cook & Torrance 1982; Heitz 2014 §4.2) is
 G1(v, m) = min(1, 2 (n·m)(n·v) / (v·m)) and G = min(G1(ωi), G1(ωo)).
 
 **Anisotropy.** A :class:`Distribution` has the roughness αu, αv along the local frame's x
-and y axes (the surface's tangent and bitangent). Then tan²θm/α² becomes (mx²/αu² + my²/αv²)/mz², πα²
-becomes π αu αv, and α² tan²θv in Λ becomes ((αu vx)² + (αv vy)²)/vz² (Heitz 2014,
+and y axes (the surface's tangent and bitangent). Then tan²θm/α² becomes
+(mx²/αu² + my²/αv²)/mz², πα² becomes π αu αv, and α² tan²θv in Λ becomes ((αu vx)² + (αv vy)²)/vz² (Heitz 2014,
 "Understanding the Masking-Shadowing Function", on anisotropic distributions: the anisotropic
 slope distribution is the isotropic one of unit roughness, stretched by αu and αv); αu = αv
 is the isotropic case.
@@ -240,22 +241,23 @@ def vcavity_g(wi, wo, m):
 
 
 def pdf_ndf(d, m):
-    """The density of :func:`sample_ndf` per unit solid angle of m: D(m) cosθm."""
+    """The density of :meth:`Distribution.sample` per unit solid angle of m: D(m) cosθm."""
     return d * m.z
 
 
 def pdf_visible(d, g1_wi, wi, m):
     """
     The density of visible normals of ``wi``: G1(wi, m) |wi·m| D(m) / cosθi (Heitz eq. 2), for
-    Smith's G1 (:func:`sample_visible`) or the V-cavity's (:func:`sample_vcavity_visible`).
+    Smith's G1 (:meth:`Distribution.sample_visible`) or the V-cavity's
+    (:meth:`Distribution.sample_vcavity_visible`).
     """
     return d * g1_wi * dr.abs(dot(wi, m)) / dr.maximum(wi.z, _TINY)
 
 
 def pdf_visible_reflection(d, g1_wi, wi):
     """
-    The density of ωo = reflect(ωi, m) for m drawn by :func:`sample_visible` or
-    :func:`sample_vcavity_visible` (with their G1): :func:`pdf_visible`
+    The density of ωo = reflect(ωi, m) for m drawn by :meth:`Distribution.sample_visible` or
+    :meth:`Distribution.sample_vcavity_visible` (with their G1): :func:`pdf_visible`
     times :func:`reflection_jacobian`, where |ωi·m| = |ωo·m| cancels: D(m) G1(ωi, m) / (4 cosθi).
     """
     return d * g1_wi / dr.maximum(4.0 * wi.z, _TINY)

@@ -30,7 +30,8 @@ draws H with φh = atan(αv/αu · tan 2πu₂) and tan²θh = −ln u₁ / (cos
 Walter shows that its density per solid angle of H is E/(π αu αv Hz³) = D(H) Hz — not the one
 Ward's paper states — and so the density of ωo = reflect(ωi, H) is D(H) Hz / (4 ωo·H). The
 recipe is exactly the stretched-slope sampling of Beckmann's D·cosθ
-(:meth:`mi_brdfs.scattering.microfacet.Distribution.sample`: the slope αu r cos 2πu₂, αv r sin 2πu₂ with
+(:meth:`mi_brdfs.scattering.microfacet.Distribution.sample`: the slope αu r cos 2πu₂,
+αv r sin 2πu₂ with
 r² = −ln(1 − u₁) has that φh and that tan²θh), which this module therefore reuses.
 """
 
