@@ -129,7 +129,7 @@ def test04_schlick_r0_against_gold(variant_llvm_ad_rgb):
     twice the largest measured shift (0.0098, blue), while an unconverged fit fails (an earlier
     parametrisation, x = log(1 + η), stopped at R0 = 0.81 in red after 400 steps).
     """
-    from mi_brdfs.plugins.materials import conductor_ior
+    from mi_brdfs.materials import conductor_ior
 
     result = fit("cooktorrance material=Au alpha=0.2",
                  "cooktorrance fresnel=schlick eta=1.5 k=0 alpha=0.2", "eta", steps=400,

@@ -14,13 +14,14 @@ import numpy as np
 
 from ..campaign.core import Context, Row, Section, md_table
 from ..render import render
-from ..scattering import floats
 from ..scenes import load_scene
 from ..timing import interleaved, median, median_ratio, timed
 
-#: Render-time targets against the built-ins: llvm_ad_rgb, scalar_rgb, and the llvm overhead of
-#: many material instances in one scene.
-TARGET_LLVM, TARGET_SCALAR, TARGET_TRACE = 1.03, 12.0, 1.2
+#: Render-time targets against the built-ins: llvm_ad_rgb, and the llvm overhead of many material
+#: instances in one scene. The scalar render path is reported without a target: scalar variants
+#: are Mitsuba's debugging variants, where a Python plugin costs what calling Python per path
+#: vertex costs; the JIT variants are where to render.
+TARGET_LLVM, TARGET_TRACE = 1.03, 1.2
 
 
 class Pair(NamedTuple):
@@ -98,14 +99,9 @@ def scalar_ratios(ctx: Context, s: Section, pairs=PAIRS) -> list:
             ratio = median_ratio(times, "plugin", "built-in")
             per = {k: median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
             s.values[f"{ctx.scalar_variant}: {pair.label}"] = f"{ratio:.2f}×"
-            goal = f"≤ {TARGET_SCALAR:g}" if pair.target else "—"
             table.append((pair.label, f"{ctx.scalar_variant} ({results['plugin'].arrangement})",
                           f"{per['plugin']:.0f} ns", f"{per['built-in']:.0f} ns",
-                          f"**{ratio:.2f}×**", goal, "—"))
-            if pair.target:
-                s.rows.append(Row(pair.label, f"{ctx.scalar_variant} render-path time ratio",
-                                  f"{ratio:.2f}×", f"≤ {TARGET_SCALAR:g}×",
-                                  ratio <= TARGET_SCALAR))
+                          f"**{ratio:.2f}×**", "—", "—"))
     return table
 
 
@@ -199,8 +195,6 @@ def scalar_calls(ctx: Context) -> list:
         calls = {}
         for label, spec in CALLS:
             b = load_bsdf(spec)
-            for _ in range(floats.PROMOTE_AFTER):  # (compiled for its configuration, as in
-                b.eval_pdf(c, si, wo)             # a render)
             calls[(label, "eval_pdf")] = lambda b=b: [b.eval_pdf(c, si, wo) for _ in range(n)]
             calls[(label, "sample")] = lambda b=b: [b.sample(c, si, 0.4, u) for _ in range(n)]
         times = interleaved(calls, repeats=ctx.n(5, 2))

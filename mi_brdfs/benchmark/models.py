@@ -13,7 +13,7 @@ import numpy as np
 from ..bsdfspec import load_bsdf
 from ..campaign.core import Context, Row, Section, md_table
 from ..checks import batch
-from ..plugins.materials import conductor_ior
+from ..materials import conductor_ior
 from ..reference import cooktorrance as ref
 from ..timing import interleaved, kernel_timed, median, median_ratio
 

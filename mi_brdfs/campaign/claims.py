@@ -112,7 +112,7 @@ def glass(ctx: Context, s: Section) -> tuple[str, str]:
 
 def conductors(ctx: Context, s: Section) -> str:
     """Schlick for metals: R0 from η, k, against the exact conductor Fresnel term."""
-    from ..plugins.materials import conductor_ior
+    from ..materials import conductor_ior
 
     cos = np.cos(np.radians(np.linspace(0, 90, 361)))
     rows = []

@@ -98,9 +98,10 @@ def mitsuba_terms(kind: str, alpha):
     ``(D, G1)`` from ``mi.MicrofacetDistribution`` (``kind`` 'beckmann' or 'ggx'), evaluated in
     the current JIT variant: D = ``eval(m)``, G1 = ``smith_g1(v, m)``.
     """
-    from ..scattering.microfacet import distribution
+    from ..scattering.microfacet import Distribution
 
-    distr = distribution(kind, alpha if np.ndim(alpha) == 0 else tuple(alpha))
+    alphas = (alpha,) if np.ndim(alpha) == 0 else tuple(alpha)
+    distr = Distribution(kind, *alphas).mitsuba()
     return _jit_terms(distr.eval, distr.smith_g1)
 
 
@@ -120,14 +121,11 @@ def package_terms(kind: str, alpha, masking: str = "smith"):
 
     if masking not in MASKING:
         raise ValueError(f"masking must be one of {', '.join(MASKING)}, not {masking!r}")
-    if np.ndim(alpha) == 0:
-        a = mi.Float(max(alpha, mf.ALPHA_MIN))
-    else:
-        a = tuple(mi.Float(max(x, mf.ALPHA_MIN)) for x in alpha)
-    g1 = {"smith": lambda v, m: mf.smith_g1(kind, a, v, m),
-          "smith_mitsuba": lambda v, m: mf.smith_g1_mitsuba(kind, a, v, m),
+    alphas = (alpha,) if np.ndim(alpha) == 0 else tuple(alpha)
+    distr = mf.Distribution(kind, *(mi.Float(max(a, mf.ALPHA_MIN)) for a in alphas))
+    g1 = {"smith": distr.smith_g1, "smith_mitsuba": distr.smith_g1_mitsuba,
           "vcavity": mf.vcavity_g1}[masking]
-    return _jit_terms(lambda m: mf.ndf(kind, a, m), g1)
+    return _jit_terms(distr.ndf, g1)
 
 
 def check_ndf(D, alpha, label: str, tol: float = TOL) -> CheckResult:
