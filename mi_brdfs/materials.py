@@ -40,15 +40,17 @@ def material_ior(name, plugin: str = "cooktorrance"):
     """
     The (η, k) textures of a named conductor, taken from a ``roughconductor`` with that
     ``material``: the same data, resolved as Mitsuba resolves it in the current variant (an RGB
-    colour in RGB variants, the measured spectra in spectral ones, luminance in mono).
+    colour in RGB variants, the measured spectra in spectral ones, luminance in mono). ``none``
+    is ``roughconductor``'s perfect conductor, η = 0, k = 1: F ≡ 1 at every angle.
     """
     names = conductor_names()
-    if not isinstance(name, str) or name not in names:
+    if not isinstance(name, str) or (name not in names and name != "none"):
         common = ", ".join(n for n in ("Ag", "Al", "Au", "Cr", "Cu", "Hg", "Ir", "Li", "Rh", "W")
                            if n in names)
         raise ParameterError(plugin, "material", name,
                              f"must name one of Mitsuba's {len(names)} measured conductors, e.g. "
-                             f"{common} (all: mi_brdfs.materials.conductor_names())")
+                             f"{common} (all: mi_brdfs.materials.conductor_names()), or none "
+                             f"(a perfect conductor)")
     found = {}
 
     class Collect(mi.TraversalCallback):

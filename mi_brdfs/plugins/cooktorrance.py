@@ -65,8 +65,7 @@ def _read_dielectric(props) -> float:
         for name in ("int_ior", "ext_ior"):
             properties.reject(props, PLUGIN, name, "must not be given together with eta (eta is "
                                                 "int_ior/ext_ior)")
-        eta = properties.number(props, PLUGIN, "eta", 1.5, lo=0.0, lo_open=True)
-        where = "eta"
+        eta, where = _dielectric_eta(props), "eta"
     else:
         inside = dielectric_ior(props["int_ior"] if "int_ior" in props else "bk7", PLUGIN,
                                 "int_ior")
@@ -79,6 +78,20 @@ def _read_dielectric(props) -> float:
                              "must make the relative index int_ior/ext_ior differ from 1 (an "
                              "index-matched interface does not scatter)")
     return eta
+
+
+def _dielectric_eta(props) -> float:
+    """``eta`` with transmission: a number, or a uniform ``<spectrum>`` (one value: refraction
+    bends every wavelength alike in this model, so a dispersive η is refused)."""
+    if props.type("eta") != mi.Properties.Type.Spectrum:
+        return properties.number(props, PLUGIN, "eta", 1.5, lo=0.0, lo_open=True)
+    tex = properties.texture(props, PLUGIN, "eta", 1.5, lo=0.0, hi=math.inf, lo_open=True)
+    rng = properties.texture_range(tex)
+    if rng is None or rng[0] != rng[1]:
+        raise ParameterError(PLUGIN, "eta", props["eta"],
+                             "must be one number with transmission = true: refraction bends "
+                             "every wavelength alike in this model (no dispersion)")
+    return rng[0]
 
 
 def _read_ior(props, needed: bool):
@@ -154,14 +167,16 @@ class CookTorrance(mi.BSDF):
      * - material
        - |string|
        - A measured conductor of Mitsuba's IOR data, the names and data of ``conductor`` and
-         ``roughconductor`` (``Au``, ``Ag``, ``Al``, ``Cu``, ``Cr``, ...). Exclusive with
-         ``eta``/``k`` (Default: ``Cu`` when ``eta`` is not given either)
+         ``roughconductor`` (``Au``, ``Ag``, ``Al``, ``Cu``, ``Cr``, ...), or ``none``, their
+         perfect conductor (η = 0, k = 1: F ≡ 1). Exclusive with ``eta``/``k``
+         (Default: ``Cu`` when ``eta`` is not given either)
 
      * - eta, k
        - |spectrum| or |texture|
        - Relative index of refraction η + ik, finite, η ≥ 0, k ≥ 0; k = 0 is a dielectric
          (η > 0 then), η = 0 with k = 1 a perfect mirror. ``k`` needs ``eta`` and defaults to
-         0 with it (``roughconductor``: 1) (Default: from ``material``)
+         0 with it (``roughconductor``: 1). With ``transmission``, η is one number (a float
+         or a uniform spectrum) (Default: from ``material``)
        - |exposed|, |differentiable|, |discontinuous|
 
      * - fresnel
@@ -273,7 +288,7 @@ class CookTorrance(mi.BSDF):
     albedo tends to F (tested). Single scattering loses energy at high α and grazing angles
     (the light that bounces between microfacets is missing: ``validation/REPORT.md`` gives
     the white-furnace albedo); the diffuse base is added, not coupled, so ρd + E_spec ≤ 1 is
-    up to the user.
+    up to the user (ρd + ks > 1 warns, values kept).
 
     .. tabs::
         .. code-tab:: xml
@@ -348,6 +363,12 @@ class CookTorrance(mi.BSDF):
         #: Albedo of the Lambertian base; None when it is the constant 0 (no lobe).
         diffuse = properties.reflectance(props, PLUGIN, "diffuse_reflectance", 0.0)
         self.m_diffuse_reflectance = None if properties.is_zero(diffuse) else diffuse
+        if self.m_diffuse_reflectance is not None:
+            properties.warn_sum(props, PLUGIN, ("diffuse_reflectance", diffuse),
+                                ("specular_reflectance", self.m_specular_reflectance),
+                                "the diffuse base is added, not coupled, so the lobes' albedos "
+                                "can add up to more than 1 (at every angle with fresnel = none, "
+                                "towards grazing incidence with a Fresnel term)")
         components = [GLOSSY_FLAGS | (ANISOTROPIC if self.m_anisotropic else 0)]
         if self.m_diffuse_reflectance is not None:
             components.append(DIFFUSE_FLAGS)

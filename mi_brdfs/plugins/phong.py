@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
 from ..scattering import mixture
 from ..scattering import phong as terms
@@ -100,7 +101,8 @@ class Phong(mi.BSDF):
     2009 for the halfway lobe), so the model conserves energy iff ρd + ks ≤ 1 (a warning
     says so otherwise, values kept). ``lecture`` and ``original`` are the unnormalized forms
     of the notes: their specular albedo at normal incidence is 2πks/(n+2) and 2πks/(n+1)
-    (mirror lobe), above ks for small n. ``original`` is not reciprocal: the plugin declares
+    (mirror lobe), above ks for small n (a warning names the albedo where ρd + ks·E(0) > 1,
+    values kept). ``original`` is not reciprocal: the plugin declares
     ``NonSymmetric`` and keeps L the light side in both transport modes (radiance: L = ωo,
     V = ωi; importance: L = ωi, V = ωo, with 1/(N·L) floored at N·L = 1e-4, where the
     model itself diverges). There is no ambient term and no distance
@@ -167,6 +169,8 @@ class Phong(mi.BSDF):
                                 ("specular_reflectance", self.m_specular_reflectance),
                                 "the normalized form then reflects more light than it receives "
                                 "(its albedo at normal incidence is their sum)")
+        else:
+            self._warn_unnormalised(props, exponent)
 
         # Lobes in component order; one whose reflectance is the constant 0 is left out.
         lobes.set_two_lobes(self, self.m_diffuse_reflectance, self.m_specular_reflectance,
@@ -175,6 +179,23 @@ class Phong(mi.BSDF):
         self._lobe_value = terms.mirror_lobe if mirror else terms.halfway_lobe
         self._lobe_sample = terms.sample_mirror if mirror else terms.sample_halfway
         self.parameters_changed([])
+
+    def _warn_unnormalised(self, props, exponent):
+        """Warn (values kept) where the ``lecture`` or ``original`` form, not normalised,
+        reflects more than it receives at normal incidence: ρd + ks·E(0) > 1, with E(0) of the
+        smallest exponent (the table above; E falls as n grows)."""
+        n = (exponent if not self._textured_exponent else
+             (properties.texture_range(exponent) or (None,))[0])
+        d = properties.upper_bound(props, "diffuse_reflectance", self.m_diffuse_reflectance)
+        s = properties.upper_bound(props, "specular_reflectance", self.m_specular_reflectance)
+        if n is None or d is None or s is None:
+            return  # a bound that cannot be known at load: nothing to say
+        albedo = float(np.max(np.add(d, np.multiply(s, float(terms.specular_albedo(
+            self.m_form, self.m_lobe, float(n)))))))
+        if albedo > 1.0 + 1e-6:  # not for rounding: an <rgb> 0.8 is stored as 0.800000012
+            properties.warn(PLUGIN, f"form = {self.m_form} reflects {albedo:g} > 1 of the light "
+                                    f"at normal incidence (ρd + ks·E(0) at n = {float(n):g}: "
+                                    f"the form is not normalised); values kept")
 
     eval, pdf = lobes.eval_half, lobes.pdf_half
     _enabled = lobes.two_lobes_enabled

@@ -152,10 +152,12 @@ def _in_range(x: float, lo: float, hi: float, lo_open: bool) -> bool:
 
 
 def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: float = 1.0,
-            lo_open: bool = False):
+            lo_open: bool = False, scalar: bool = False):
     """
     A spectrally or spatially varying parameter: a float, ``<rgb>``, ``<spectrum>`` or any
     texture, with every value finite and within [``lo``, ``hi``] (``(lo, hi]`` with ``lo_open``).
+    With ``scalar`` (one value per point, such as a roughness) an ``<rgb>`` and a ``<spectrum>``
+    that is not uniform are refused: the model would average their channels.
 
     Values bounded by 1 are read with ``get_texture`` (reflectances, which Mitsuba upsamples as
     such); others with ``get_unbounded_texture`` (η, k, α), which accepts RGB values above 1.
@@ -172,6 +174,8 @@ def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: 
     getter = props.get_texture if hi <= 1.0 else props.get_unbounded_texture
     if name in props:
         kind = props.type(name)
+        if scalar:
+            _refuse_channels(props, plugin, name, kind, getter, default)
         if kind in (T.Float, T.Integer):
             value = float(props[name])
             if not _in_range(value, lo, hi, lo_open):
@@ -192,8 +196,22 @@ def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: 
             return tex
         else:
             raise ParameterError(plugin, name, props[name],
+                                 "must be a float or a texture" if scalar else
                                  "must be a float, <rgb>, <spectrum> or a texture")
     return getter(name, default)
+
+
+def _refuse_channels(props, plugin, name, kind, getter, default) -> None:
+    """:func:`texture`'s refusal of colours for a parameter with one value per point."""
+    T = _types()
+    why = ("must be a float or a texture, one value per point (the model would average the "
+           "channels of an <rgb> or a varying <spectrum>)")
+    if kind == T.Color:
+        raise ParameterError(plugin, name, [float(c) for c in props[name]], why)
+    if kind == T.Spectrum:
+        rng = texture_range(getter(name, default))
+        if rng is None or rng[0] != rng[1]:
+            raise ParameterError(plugin, name, props[name], why)
 
 
 def reflectance(props, plugin: str, name: str, default: float):
@@ -221,7 +239,8 @@ def roughness(props, plugin: str, default: float = 0.1):
         names = given
     else:
         names = ["alpha"]
-    alphas = [texture(props, plugin, name, default, lo=0.0, hi=math.inf) for name in names]
+    alphas = [texture(props, plugin, name, default, lo=0.0, hi=math.inf, scalar=True)
+              for name in names]
     for name, tex in zip(names, alphas):
         low = texture_range(tex)
         if low is not None and low[0] < float(np.float32(ALPHA_MIN)):  # 1e-4 held in float32
