@@ -12,7 +12,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from helpers import eval_pdf, random_directions, sample
+from helpers import assert_matches_reference, eval_pdf, random_directions, sample
 
 import mi_brdfs
 from mi_brdfs import checks
@@ -112,9 +112,11 @@ def test04_eval_equals_the_float64_reference(variants_rgb, np_rng, name):
     n = small(20_000)
     wi, wo = random_directions(np_rng, n, lower=False), random_directions(np_rng, n)
     value = eval_pdf(mi.load_dict(spec), wi, wo)[0]
-    expected = for_spec(spec).brdf(wi, wo) * np.maximum(wo[:, 2], 0)[:, None]
-    # float32 directions near grazing move tan²θh/α² by ~1e-6 of itself
-    assert_rel(value, expected, 2e-4, floor=1e-6 * expected.max(), what=name)
+    model = for_spec(spec)
+    # the tolerance follows the float32 conditioning of f·cosθo at each pair (near grazing
+    # a float32 direction moves tan²θh/α² by far more than its own rounding)
+    assert_matches_reference(value, lambda a, b: model.brdf(a, b) * np.maximum(b[:, 2:3], 0),
+                             wi, wo, 1e-4, what=name)
     assert not value[wo[:, 2] <= 0].any()
 
 
