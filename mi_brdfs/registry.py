@@ -113,6 +113,14 @@ def default_variant() -> str:
     return "llvm_ad_rgb" if llvm_usable() else "scalar_rgb"
 
 
+def usable_variants() -> list[str]:
+    """The variants of this Mitsuba that can be set here: scalar ones, ``llvm_*`` where a
+    working libLLVM is loaded, ``cuda_*`` where a CUDA device is."""
+    ok = {"scalar_": True, "llvm_": llvm_usable(),
+          "cuda_": bool(dr.has_backend(dr.JitBackend.CUDA))}
+    return [v for v in mi.variants() if any(v.startswith(p) and u for p, u in ok.items())]
+
+
 def use_variant(variant: str | None = None, fallback: bool = True) -> str:
     """
     Set a Mitsuba variant and register the plugins in it.
@@ -122,7 +130,9 @@ def use_variant(variant: str | None = None, fallback: bool = True) -> str:
     Parameter ``fallback`` (bool): when an ``llvm_*`` variant is asked for but no working libLLVM
     is there, warn in one line and use the scalar counterpart instead of failing.
 
-    Returns → str: the variant now set.
+    Returns → str: the variant now set. Raises MiBrdfsError (one line) for a variant this
+    Mitsuba lacks or this machine cannot run (a ``cuda_*`` one without a CUDA device: the line
+    names the variants that are usable here).
     """
     if variant is None:
         variant = default_variant()
@@ -138,6 +148,10 @@ def use_variant(variant: str | None = None, fallback: bool = True) -> str:
         scalar = scalar if scalar in available else "scalar_rgb"
         _warn_no_llvm(variant, scalar)
         variant = scalar
+    if variant.startswith("cuda_") and not dr.has_backend(dr.JitBackend.CUDA):
+        raise MiBrdfsError(f"variant '{variant}' needs a CUDA device, and this machine has none "
+                           f"(no NVIDIA GPU or driver); usable here: "
+                           f"{', '.join(usable_variants())}")
     try:
         mi.set_variant(variant)
     except (ImportError, RuntimeError) as e:

@@ -79,3 +79,18 @@ def test02_no_emitter_is_a_warning(tmp_path, capsys):
     assert main(["render", str(scene), "--spp", "1", "-q", "-o", str(tmp_path / "d.exr")]) == 0
     err = capsys.readouterr().err
     assert "mi-brdfs: warning: dark.xml has no emitter: its image is black" in err
+
+
+@pytest.mark.skipif(bool(__import__("drjit").has_backend(__import__("drjit").JitBackend.CUDA)),
+                    reason="a CUDA device is there: cuda_ad_rgb is usable")
+@pytest.mark.parametrize("command", [["check", "lambert"], ["furnace", "lambert"],
+                                     ["fit", "lambert", "--model", "lambert"]])
+def test03_cuda_variant_without_a_device(tmp_path, monkeypatch, command):
+    """--variant cuda_ad_rgb on a machine without CUDA: one line that says so and names the
+    variants that work here (not drjit's advice to call jit_init)."""
+    monkeypatch.chdir(tmp_path)
+    line = cli_one_line_error(command + ["--variant", "cuda_ad_rgb"],
+                              "variant 'cuda_ad_rgb' needs a CUDA device, and this machine has "
+                              "none")
+    assert "usable here: scalar_rgb" in line and "jit_init" not in line and "cuda_" not in \
+        line.split("usable here:")[1], line
