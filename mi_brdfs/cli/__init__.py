@@ -32,8 +32,11 @@ def main(argv: list[str] | None = None) -> int:
     except ImportError as e:
         print(f"mi-brdfs: error: {e}", file=sys.stderr)
         return EXIT_USER_ERROR
+    from ..variants import variant_kept
+
     try:
-        return args.func(args)
+        with variant_kept():  # main called in-process leaves the caller's variant set
+            return args.func(args)
     except MiBrdfsError as e:
         print(f"mi-brdfs: error: {e}", file=sys.stderr)
         return EXIT_USER_ERROR

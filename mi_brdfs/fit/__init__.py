@@ -107,6 +107,7 @@ import time
 import numpy as np
 
 from ..errors import MiBrdfsError, counts
+from ..variants import keeps_variant
 from .optimise import EPSILON, _best, _require_ad_rgb, _run_starts, _target_values, direction_pairs
 from .parameters import (
     WIDTHS, Parameter, _parameters, _prepare_model, _starts, _written, beckmann_width,
@@ -133,6 +134,7 @@ def _checked(starts: str, lr: float, thetas_deg) -> np.ndarray:
 
 
 @counts("pairs", "steps")
+@keeps_variant
 def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: float = 0.1,
         seed: int = 0, starts: str = "auto", thetas_deg=ALBEDO_THETAS, variant: str | None = None,
         progress: bool = False) -> FitResult:
@@ -150,8 +152,9 @@ def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: f
     are kept). ``steps``: Adam steps per start. ``lr``: Adam's learning rate in the transformed
     variables. ``seed``: of the pairs. ``starts``: ``'auto'`` (MODEL's values, and the closed-form
     width mapping or spread widths) or ``'given'`` (MODEL's values only).
-    Parameter ``variant``: an RGB AD variant to set first (default: the current one, which must
-    be one; ``llvm_ad_rgb`` when none is set).
+    Parameter ``variant``: an RGB AD variant to fit in (default: the current one, which must
+    be one; ``llvm_ad_rgb`` when none is set). The caller's variant is set again on return,
+    and when the fit raises (:func:`mi_brdfs.variants.variant_kept`).
 
     Returns → :class:`FitResult`. Raises MiBrdfsError (one line) for bad input.
     """

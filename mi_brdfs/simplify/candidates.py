@@ -195,7 +195,7 @@ def candidates_for(material: Material, values: dict, fit_fn) -> list:
     return out
 
 
-def _fit(target: dict, model: dict, free, sizes: dict, variant: str):
+def _fit(target: dict, model: dict, free, sizes: dict):
     """(fitted spec, residual, albedo error) of :func:`mi_brdfs.fit.fit`, in an AD variant."""
     import drjit as dr
     import mitsuba as mi
@@ -206,18 +206,15 @@ def _fit(target: dict, model: dict, free, sizes: dict, variant: str):
     ad = dr.is_diff_v(mi.Float) and mi.is_rgb and not mi.is_polarized
     if not ad and not mi_brdfs.llvm_usable():
         raise MiBrdfsError("fits need llvm_ad_rgb, which this machine lacks")
-    try:
-        result = fit(target, model, free, variant=None if ad else "llvm_ad_rgb", **sizes)
-    finally:
-        if not ad:
-            mi_brdfs.use_variant(variant, fallback=False)
+    # fit hands this variant back when it returns or raises
+    result = fit(target, model, free, variant=None if ad else "llvm_ad_rgb", **sizes)
     return result.spec, result.residual, result.albedo_error
 
 
-def _cached_fit(store, fit_sizes: dict, variant: str):
+def _cached_fit(store, fit_sizes: dict):
     """
     The ``fit_fn(target, model, free)`` of :func:`candidates_for`: :func:`_fit` with
-    ``fit_sizes`` in ``variant``, its result (or the note why it failed) stored in ``store``.
+    ``fit_sizes`` (in llvm_ad_rgb where the current variant has no AD), its result (or the note why it failed) stored in ``store``.
     """
     from .. import __version__
 
@@ -227,7 +224,7 @@ def _cached_fit(store, fit_sizes: dict, variant: str):
         if record is not None:
             return record["result"] if "result" in record else record["note"]
         try:
-            result = _fit(target, model, free, fit_sizes, variant)
+            result = _fit(target, model, free, fit_sizes)
             stored = {"result": result}
         except MiBrdfsError as e:
             result = f"fit failed: {e}"

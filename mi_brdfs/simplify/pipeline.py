@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 from ..errors import MiBrdfsError, counts, mitsuba_error_line
+from ..variants import keeps_variant
 from .candidates import _cached_fit, candidates_for
 from .choose import _choose, _derive, _predict
 from .measure import (
@@ -58,6 +59,7 @@ def _report_dir(report) -> Path | None:
 
 @counts("spp", "repeats")
 @_public
+@keeps_variant
 def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, output=None,
              report=None, quick: bool = False, spp: int | None = None,
              defines: dict | None = None, cache=True, confidence: float = 2.0,
@@ -69,7 +71,8 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
 
     Parameter ``scene``: a scene file or bundled name. ``tolerance``: on the relative RMSE
     (RMSE over the reference image's mean) of the converged image against the original's.
-    ``variant``: Mitsuba variant (default: the current one, else llvm_ad_rgb where it works).
+    ``variant``: Mitsuba variant (default: the current one, else llvm_ad_rgb where it works);
+    the caller's is set again on return, and when simplify raises.
     ``output``: where to write the simplified scene (None: not written). ``report``: a folder
     for SIMPLIFY.md, the plot and (by default) the cache. ``quick``: ``res`` of
     :data:`QUICK_RES` (where the scene declares that default) and fewer spp, repeats and fit
@@ -95,7 +98,7 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
     repeats = repeats or REPEATS[level]
     values = dict(scene_defaults, **defines)
     store, engine = _engine(path, data, report_dir, cache, variant, defines, spp, repeats, level)
-    fit_fn = _cached_fit(store, FIT_SIZES[level], variant)
+    fit_fn = _cached_fit(store, FIT_SIZES[level])
 
     # candidates of every material (fits included), then the measurements
     plans = _plans(materials, values, fit_fn if fits else None, notes)
