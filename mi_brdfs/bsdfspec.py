@@ -256,17 +256,42 @@ def _bsdf_file(path: str) -> str:
     return text
 
 
+def _words(tokens) -> list[str]:
+    """
+    The words of command-line tokens: a token with blanks that is no XML fragment and no
+    existing file (a quoted ``'roughconductor alpha=0.3'``) is split as a shell splits it, so
+    that one spec reads the same quoted or not.
+    """
+    if isinstance(tokens, str):
+        raise MiBrdfsError(f"parse_cli takes a list of tokens, not the string {tokens!r} "
+                           f"(parse() reads one spec from a string)")
+    words = []
+    for token in tokens:
+        token = str(token)
+        if len(token.split()) <= 1 or token.lstrip().startswith("<") or os.path.isfile(token):
+            words.append(token)
+            continue
+        try:
+            words += shlex.split(token)
+        except ValueError as e:
+            raise MiBrdfsError(f"cannot read BSDF '{token}': {e}") from None
+    return words
+
+
 def parse_cli(tokens: list[str]) -> list:
     """
     BSDFs from command-line tokens. A token without '=' starts a BSDF: a plugin name (followed
     by its ``key=value`` parameters), an XML file holding one ``<bsdf>``, or an XML fragment.
+    A quoted spec with blanks is the same as its words (:func:`_words`): every command and
+    :func:`parse` read one grammar.
 
         parse_cli(['roughconductor', 'alpha=0.3', 'material=Au', 'diffuse'])
         → [{'type': 'roughconductor', 'alpha': 0.3, 'material': 'Au'}, {'type': 'diffuse'}]
+        parse_cli(['roughconductor alpha=0.3 material=Au', 'diffuse'])  → the same
     """
 
     specs: list = []
-    for token in tokens:
+    for token in _words(tokens):
         if "=" in token and not token.lstrip().startswith("<"):
             key, _, value = token.partition("=")
             if not specs or not isinstance(specs[-1], dict):

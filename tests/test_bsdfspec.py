@@ -96,3 +96,57 @@ def test05_bad_specs_get_one_line(variant_scalar_rgb, spec, message):
     text = str(info.value)
     assert message in text and "\n" not in text, text
     assert mi_brdfs is not None
+
+
+SPLIT = [{"type": "roughconductor", "alpha": 0.3, "material": "Au"}, {"type": "diffuse"}]
+
+
+@pytest.mark.parametrize("tokens", [
+    ["roughconductor", "alpha=0.3", "material=Au", "diffuse"],
+    ["roughconductor alpha=0.3 material=Au", "diffuse"],
+    ["roughconductor alpha=0.3", "material=Au", "diffuse"],
+    ["roughconductor 'alpha=0.3' material=Au diffuse"],
+], ids=["words", "quoted", "part-quoted", "one-token"])
+def test06_one_grammar_quoted_or_not(variant_scalar_rgb, tokens):
+    """A spec reads the same quoted or as words, in parse_cli (the commands) and parse (the
+    API): 'mi-brdfs check \"roughconductor alpha=0.3\"' was refused, with a message that told
+    the user to write exactly that."""
+    assert bsdfspec.parse_cli(tokens) == SPLIT
+    assert bsdfspec.parse("roughconductor alpha=0.3 material=Au") == SPLIT[0]
+
+
+QUOTED_COMMANDS = {
+    "check": ["check", "roughconductor alpha=0.3", "diffuse", "-q"],
+    "furnace": ["furnace", "roughconductor alpha=0.3", "diffuse", "-n", "16", "--thetas", "0"],
+    "plot": ["plot", "slice", "roughconductor alpha=0.3", "diffuse", "--res", "4", "-o", "s.png"],
+    "fit": ["fit", "roughconductor alpha=0.3", "--model", "cooktorrance alpha=0.1",
+            "--free", "alpha", "--pairs", "256", "--steps", "2", "-q"],
+}
+
+
+@pytest.mark.parametrize("command", list(QUOTED_COMMANDS))
+def test07_every_command_takes_a_quoted_spec(variant_scalar_rgb, tmp_path, monkeypatch, capsys,
+                                            command):
+    """check, furnace, plot and fit take 'roughconductor alpha=0.3' as one argument (check's
+    battery stubbed: the spec is what is tested, not the checks)."""
+    from mi_brdfs.checks import CheckResult
+    from mi_brdfs.cli import main
+
+    seen = []
+    monkeypatch.setattr(checks, "run_battery", lambda spec, **kw: seen.append(spec) or [
+        CheckResult("stub", True, 0.0, 0.0, "stub")])
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
+    args = QUOTED_COMMANDS[command]
+    if command == "plot":
+        pytest.importorskip("matplotlib")
+    if command == "fit" and not mi_brdfs.llvm_usable():
+        pytest.skip("fit needs llvm_ad_rgb")
+    code = main(args + (["--variant", "scalar_rgb"] if command != "fit" else []))
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    assert "error" not in out.err
+    if command == "check":
+        assert seen == [{"type": "roughconductor", "alpha": 0.3}, {"type": "diffuse"}]
+    elif command == "furnace":
+        assert "roughconductor(alpha=0.3)" in out.out

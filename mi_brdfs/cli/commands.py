@@ -170,20 +170,9 @@ def cmd_compare(args) -> int:
     return 0
 
 
-def _spec_tokens(tokens) -> list:
-    """Command-line BSDF tokens, a quoted 'plugin key=value ...' split into its words."""
-    import shlex
-
-    words = []
-    for token in tokens:
-        words += [token] if token.lstrip().startswith("<") else shlex.split(token)
-    return words
-
-
 def cmd_fit(args) -> int:
     import mi_brdfs
     from ..bsdfspec import parse_cli
-    from ..errors import MiBrdfsError
     from ..fit import fit, plot_fit, write_json
     from ..imageio import check_writable
 
@@ -192,13 +181,9 @@ def cmd_fit(args) -> int:
     if plot_path:
         from ..plots import pyplot
         pyplot()  # matplotlib missing: say so before the fit
-    try:
-        target_tokens, model_tokens = _spec_tokens(args.target), _spec_tokens(args.model)
-    except ValueError as e:
-        raise MiBrdfsError(f"cannot read the BSDF: {e}") from None
     mi_brdfs.use_variant(args.variant, fallback=False)
-    (target,), (model,) = _one_bsdf(parse_cli(target_tokens), "TARGET"), \
-        _one_bsdf(parse_cli(model_tokens), "--model")
+    (target,), (model,) = _one_bsdf(parse_cli(args.target), "TARGET"), \
+        _one_bsdf(parse_cli(args.model), "--model")
     result = fit(target, model, args.free, pairs=args.pairs, steps=args.steps, seed=args.seed,
                  variant=args.variant, progress=not args.quiet)
     print(result.summary())

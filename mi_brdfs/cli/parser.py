@@ -123,7 +123,8 @@ def _add_render(sub) -> None:
 
 #: The help of the BSDF arguments of check, furnace and plot.
 _BSDF_HELP = ("one or more BSDFs: a plugin name followed by its key=value parameters "
-              "(e.g. roughconductor alpha=0.3 material=Au diffuse), an XML file, or a "
+              "(e.g. roughconductor alpha=0.3 material=Au diffuse; the same quoted: "
+              "'roughconductor alpha=0.3 material=Au' diffuse), an XML file, or a "
               "quoted XML fragment")
 
 
