@@ -9,7 +9,8 @@ class MiBrdfsError(Exception):
 
 
 class ParameterError(MiBrdfsError, ValueError):
-    """A plugin parameter with a value outside what the plugin allows."""
+    """A parameter of a plugin, or an argument of a public function (``plugin`` then names the
+    function), with a value outside what it allows."""
 
     def __init__(self, plugin: str, name: str, value, allowed: str):
         self.plugin, self.name, self.value, self.allowed = plugin, name, value, allowed
@@ -92,5 +93,139 @@ def counts(*names: str):
                     raise CountError(f"{where}: {name} = {value!r} is invalid: must be a whole "
                                      f"number ≥ 1")
             return fn(*args, **kwargs)
+        return checked
+    return decorate
+
+
+# -------------------------------------------------------------------------------------------------
+# Arguments of public functions: each rule returns the value (converted) or raises ValueError
+# with what is allowed; :func:`arguments` turns that into one ParameterError
+# -------------------------------------------------------------------------------------------------
+
+
+def _is_real(value) -> bool:
+    import numbers
+
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _array(value, allowed: str):
+    """``value`` as a flat float64 array: a number or a sequence of numbers (no string)."""
+    import numpy as np
+
+    if isinstance(value, (str, bytes, dict)) or value is None:
+        raise ValueError(allowed)
+    try:
+        return np.asarray(value, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        raise ValueError(allowed) from None
+
+
+def valid_seed(value) -> int:
+    """A seed: a whole number in [0, 2³²) (what NumPy's and DrJit's generators take)."""
+    import numbers
+
+    if not (isinstance(value, numbers.Integral) and not isinstance(value, bool)
+            and 0 <= value < 2 ** 32):
+        raise ValueError("must be a whole number in [0, 2^32)")
+    return int(value)
+
+
+def valid_direction(value):
+    """A direction in the local frame: 3 finite numbers, not all 0 (as a float64 array)."""
+    import numpy as np
+
+    allowed = ("must be 3 finite numbers, not all 0 (a direction in the local frame, e.g. "
+               "(0.6, 0, 0.8))")
+    a = _array(value, allowed)
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or not np.any(a != 0):
+        raise ValueError(allowed)
+    return a
+
+
+def valid_angles(hi: float, unit: str):
+    """A rule: one or more finite angles in [0, ``hi``] ``unit`` (as a tuple of floats)."""
+    def rule(value) -> tuple:
+        import numpy as np
+
+        allowed = f"must be one or more finite angles in [0, {hi:g}] {unit}"
+        a = _array(value, allowed)
+        if a.size == 0 or not np.all(np.isfinite(a)) or not np.all((a >= 0) & (a <= hi)):
+            raise ValueError(allowed)
+        return tuple(float(x) for x in a)
+    return rule
+
+
+def valid_angle(hi: float, unit: str):
+    """A rule: one finite angle in [0, ``hi``] ``unit``."""
+    def rule(value) -> float:
+        if not (_is_real(value) and 0 <= value <= hi):
+            raise ValueError(f"must be a finite angle in [0, {hi:g}] {unit}")
+        return float(value)
+    return rule
+
+
+def nonnegative(value) -> float:
+    """A tolerance: a finite number ≥ 0."""
+    import math
+
+    if not (_is_real(value) and math.isfinite(value) and value >= 0):
+        raise ValueError("must be a finite number >= 0")
+    return value
+
+
+def positive(value) -> float:
+    """A finite number > 0 (a number of standard errors, a scale)."""
+    import math
+
+    if not (_is_real(value) and math.isfinite(value) and value > 0):
+        raise ValueError("must be a finite number > 0")
+    return value
+
+
+def fraction(value) -> float:
+    """A number in (0, 1) (a significance level)."""
+    if not (_is_real(value) and 0 < value < 1):
+        raise ValueError("must be a number in (0, 1)")
+    return value
+
+
+def nonempty_specs(value):
+    """One BSDF spec or a non-empty list of them."""
+    if isinstance(value, (list, tuple)) and len(value) == 0:
+        raise ValueError("must be one BSDF spec or a non-empty list of them")
+    return value
+
+
+def arguments(**rules):
+    """
+    Decorator: each named argument, where given (not None), is checked (and converted) by its
+    rule (:func:`valid_seed`, :func:`valid_direction`, :func:`valid_angles`, ...) before any work; a value a rule
+    refuses ends in one ParameterError naming the function, the parameter, the value and what
+    is allowed, instead of NumPy's or DrJit's ValueError, IndexError or TypeError from deep
+    inside.
+    """
+    import functools
+    import inspect
+
+    def decorate(fn):
+        signature = inspect.signature(fn)
+        where = f"{fn.__module__.removeprefix('mi_brdfs.')}.{fn.__name__}"
+
+        @functools.wraps(fn)
+        def checked(*args, **kwargs):
+            try:
+                bound = signature.bind_partial(*args, **kwargs)
+            except TypeError:
+                return fn(*args, **kwargs)  # Python's own error for a wrong call
+            for name, rule in rules.items():
+                value = bound.arguments.get(name)
+                if value is None:
+                    continue
+                try:
+                    bound.arguments[name] = rule(value)
+                except ValueError as e:
+                    raise ParameterError(where, name, value, str(e)) from None
+            return fn(*bound.args, **bound.kwargs)
         return checked
     return decorate

@@ -58,3 +58,74 @@ def test04_the_command_line_in_process_leaves_the_variant(variant_llvm_ad_rgb, t
     assert main(["fit", "lambert", "--model", "lambert", "--variant", "scalar_rgb"]) == 2
     assert "fit needs an RGB variant" in capsys.readouterr().err
     assert mi.variant() == "llvm_ad_rgb"
+
+
+#: (function, its dotted name in the message, arguments, the parameter, the value as shown).
+MISUSE = [
+    ("chi2_bsdf", {"wi": "0.6,0,0.8"}, "wi", '"0.6,0,0.8"'),
+    ("chi2_bsdf", {"wi": (0.6, 0.8)}, "wi", "(0.6, 0.8)"),
+    ("chi2_bsdf", {"wi": []}, "wi", "[]"),
+    ("chi2_bsdf", {"wi": (0, 0, 0)}, "wi", "(0, 0, 0)"),
+    ("chi2_bsdf", {"seed": -1}, "seed", "-1"),
+    ("check_consistency", {"seed": -1, "n": 16}, "seed", "-1"),
+    ("check_consistency", {"seed": 1.5, "n": 16}, "seed", "1.5"),
+    ("check_reciprocity", {"seed": -1, "n": 16}, "seed", "-1"),
+    ("check_positivity", {"seed": -1, "n": 16}, "seed", "-1"),
+    ("check_lobes", {"n": 0}, "n", "0"),
+    ("check_pdf_integral", {"seed": -1, "n": 16}, "seed", "-1"),
+    ("check_equal", {"spec_b": "diffuse", "seed": -1, "n": 16}, "seed", "-1"),
+    ("albedo_curve", {"thetas_deg": [], "n": 16}, "thetas_deg", "[]"),
+    ("albedo_curve", {"thetas_deg": "0,30", "n": 16}, "thetas_deg", '"0,30"'),
+    ("albedo_curve", {"thetas_deg": (0.0,), "seed": -1, "n": 16}, "seed", "-1"),
+    ("check_energy", {"thetas_deg": (0.0,), "sigmas": -1, "n": 16}, "sigmas", "-1"),
+    ("furnace_render", {"seed": -1, "spp": 1, "res": 4}, "seed", "-1"),
+    ("check_stability", {"n_random": 4, "seed": -1}, "seed", "-1"),
+    ("eval_precision", {"seed": -1, "n": 16}, "seed", "-1"),
+]
+
+
+@pytest.mark.parametrize("name,kwargs,parameter,shown", MISUSE,
+                         ids=[f"{m[0]}-{m[2]}={m[3]}" for m in MISUSE])
+def test05_checks_refuse_misuse_in_one_line(variant_llvm_ad_rgb, name, kwargs, parameter,
+                                            shown):
+    """One MiBrdfsError naming the function, the parameter, the value and what is allowed,
+    where NumPy's ValueError or IndexError (or DrJit's TypeError) came out."""
+    from mi_brdfs import checks
+
+    with pytest.raises(MiBrdfsError) as info:
+        getattr(checks, name)("lambert", **kwargs)
+    text = str(info.value)
+    assert "\n" not in text and f"{name}: " in text, text
+    assert (f'parameter "{parameter}" = {shown} is invalid: must' in text
+            or f"{parameter} = {shown} is invalid: must" in text), text
+
+
+def test06_check_stability_of_no_spec(variant_scalar_rgb):
+    from mi_brdfs import checks
+
+    with pytest.raises(MiBrdfsError, match=r'check_stability: parameter "specs" = \[\] is '
+                                           r'invalid: must be one BSDF spec or a non-empty'):
+        checks.check_stability([])
+
+
+@pytest.mark.parametrize("output", ["x.exr", "x.json", "x"])
+def test07_simplify_refuses_an_output_that_is_no_xml(variant_llvm_ad_rgb, tmp_path, output):
+    """simplify(..., output='x.exr') wrote the XML scene into an .exr file."""
+    from mi_brdfs.simplify import simplify
+
+    path = tmp_path / "tiny.xml"
+    path.write_text(SCENE)
+    with pytest.raises(MiBrdfsError, match=f'simplify: parameter "output" = ".*{output}" is '
+                                           f'invalid: must end in .xml'):
+        simplify(path, output=tmp_path / output, cache=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tiny.xml"]
+
+
+def test08_write_json_refuses_another_extension(variant_llvm_ad_rgb, tmp_path):
+    from mi_brdfs.fit import write_json
+
+    result = fit("lambert reflectance=0.3", "lambert", **TINY_FIT)
+    with pytest.raises(MiBrdfsError, match='fit.write_json: parameter "path" = ".*x.exr" is '
+                                           'invalid: must end in .json'):
+        write_json(result, tmp_path / "x.exr")
+    assert not list(tmp_path.iterdir())

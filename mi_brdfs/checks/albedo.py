@@ -32,7 +32,9 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from ..errors import counts
+from ..errors import (
+    arguments, counts, nonnegative, positive, valid_angle, valid_angles, valid_seed,
+)
 from ..reference.quadrature import sphere_grid
 from . import batch
 from .result import CheckResult
@@ -81,6 +83,7 @@ def _sampled(bsdf, theta: float, n: int, seed: int, ctx):
 
 
 @counts("n")
+@arguments(theta=valid_angle(math.pi, "radians"), seed=valid_seed)
 def albedo_sampled(bsdf, theta: float, n: int | None = None, seed: int = 0, ctx=None):
     """
     E(θ) as the mean ``sample()`` weight over ``n`` samples at incident angle ``theta`` (radians).
@@ -114,6 +117,7 @@ def _our_directions(rng, n: int, strategy: str, sphere: bool):
 
 
 @counts("n")
+@arguments(theta=valid_angle(math.pi, "radians"), seed=valid_seed)
 def albedo_eval(bsdf, theta: float, n: int | None = None, seed: int = 1,
                 strategy: str = "cosine", ctx=None):
     """
@@ -132,6 +136,8 @@ def albedo_eval(bsdf, theta: float, n: int | None = None, seed: int = 1,
                                      np.zeros((int((~ok).sum()), value.shape[1]))]))
 
 
+@counts("n_mu", "n_phi")
+@arguments(theta=valid_angle(math.pi, "radians"))
 def sphere_quadrature(bsdf, theta: float, n_mu: int = 256, n_phi: int = 256, ctx=None,
                       whole_sphere: bool = False):
     """
@@ -153,6 +159,7 @@ def sphere_quadrature(bsdf, theta: float, n_mu: int = 256, n_phi: int = 256, ctx
 
 
 @counts("n_mu", "n_phi")
+@arguments(theta=valid_angle(math.pi, "radians"))
 def albedo_quadrature(bsdf, theta: float, n_mu: int = 256, n_phi: int = 256, ctx=None):
     """
     E(θ) = ∫ eval(ωo) dμ dφ by :func:`sphere_quadrature`.
@@ -202,6 +209,7 @@ class AlbedoCurve:
 
 
 @counts("n")
+@arguments(thetas_deg=valid_angles(180.0, "degrees"), seed=valid_seed)
 def albedo_curve(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, seed: int = 0,
                  estimators=("eval", "quadrature", "reference"), ctx=None,
                  progress: bool = False) -> AlbedoCurve:
@@ -260,6 +268,7 @@ def albedo_curve(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, seed: in
 
 
 @counts("n")
+@arguments(thetas_deg=valid_angles(180.0, "degrees"), sigmas=positive)
 def check_energy(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, sigmas: float = 5.0,
                  curve: AlbedoCurve | None = None) -> CheckResult:
     """
@@ -311,6 +320,7 @@ AGREEMENT_RTOL = 5e-3
 
 
 @counts("n")
+@arguments(thetas_deg=valid_angles(180.0, "degrees"), sigmas=positive, rtol=nonnegative)
 def check_albedo_agreement(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None,
                            sigmas: float = 5.0, rtol: float = AGREEMENT_RTOL,
                            curve: AlbedoCurve | None = None) -> CheckResult:

@@ -19,7 +19,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from ..errors import counts
+from ..errors import arguments, counts, nonnegative, valid_seed
 from . import batch
 from .result import CheckResult
 
@@ -85,6 +85,7 @@ def conditioning(bsdf, wi: np.ndarray, wo: np.ndarray, ctx=None, seed: int = 0) 
 
 
 @counts("n")
+@arguments(seed=valid_seed, rtol=nonnegative)
 def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = RTOL,
                       ctx=None) -> CheckResult:
     """

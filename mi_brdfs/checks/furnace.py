@@ -21,7 +21,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe
-from ..errors import counts
+from ..errors import arguments, counts, nonnegative, valid_seed
 from ..scenes import load_scene
 from .result import CheckResult
 
@@ -105,6 +105,7 @@ def _reflected_albedo(spec, n: int | None) -> np.ndarray:
 
 
 @counts("spp", "res", "n")
+@arguments(seed=valid_seed)
 def furnace_render(spec, spp: int = 64, res: int = 64, seed: int = 0, max_depth: int = 2,
                    predict: bool = True, n: int | None = None,
                    reflection_only: bool = False) -> FurnaceRender:
@@ -141,6 +142,7 @@ def furnace_render(spec, spp: int = 64, res: int = 64, seed: int = 0, max_depth:
 
 
 @counts("spp", "res")
+@arguments(tol=nonnegative)
 def check_furnace(spec, spp: int = 64, res: int = 64, tol: float = 0.005, **kwargs) -> CheckResult:
     """
     The furnace image must be finite everywhere and its mean within ``tol`` of the mean that

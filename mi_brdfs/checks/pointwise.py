@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from ..errors import counts
+from ..errors import arguments, counts, nonnegative, valid_seed
 from . import batch
 from .result import CheckResult
 
@@ -21,6 +21,7 @@ def _rel(a: np.ndarray, b: np.ndarray, atol: float) -> np.ndarray:
 
 
 @counts("n")
+@arguments(seed=valid_seed, rtol=nonnegative, atol=nonnegative)
 def check_equal(spec_a, spec_b, n: int | None = None, seed: int = 0, rtol: float = 1e-5,
                 atol: float = 1e-7, sample: bool = True, upper: bool = False,
                 ctx=None, pdf: bool = True) -> CheckResult:

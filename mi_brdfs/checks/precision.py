@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..bsdfspec import load_bsdf
+from ..errors import arguments, counts, valid_angles, valid_seed
 from . import batch
 
 #: Incident angles (degrees) at which the lobe is sampled.
@@ -34,6 +35,8 @@ class Precision:
     count: int
 
 
+@counts("n")
+@arguments(seed=valid_seed, thetas=valid_angles(180.0, "degrees"))
 def eval_precision(spec, n: int | None = None, seed: int = 0, thetas=THETAS) -> Precision | None:
     """
     Relative error of ``eval`` against the float64 reference, over ``n`` directions per incident

@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from ..errors import counts
+from ..errors import arguments, counts, nonnegative, valid_seed
 from . import batch
 from .result import CheckResult
 
@@ -35,6 +35,7 @@ def _angles(v: np.ndarray) -> str:
 
 
 @counts("n")
+@arguments(seed=valid_seed, min_cos=nonnegative)
 def reciprocity(spec, n: int | None = None, seed: int = 0, min_cos: float = 1e-3):
     """
     f(a, b) and f(b, a) at ``n`` random pairs over the upper hemisphere.
@@ -76,6 +77,7 @@ def expected_asymmetry(bsdf) -> str | None:
 
 
 @counts("n")
+@arguments(seed=valid_seed, rtol=nonnegative)
 def check_reciprocity(spec, n: int | None = None, seed: int = 0, rtol: float = RTOL) -> CheckResult:
     """
     Largest relative asymmetry |f(a,b) − f(b,a)| / max over random pairs, and where it occurs.
@@ -105,6 +107,7 @@ def check_reciprocity(spec, n: int | None = None, seed: int = 0, rtol: float = R
 
 
 @counts("n")
+@arguments(seed=valid_seed)
 def check_positivity(spec, n: int | None = None, seed: int = 1) -> CheckResult:
     """
     eval ≥ 0 and pdf ≥ 0 (and finite) at random pairs over the whole sphere and at the stress

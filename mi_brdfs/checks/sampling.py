@@ -14,7 +14,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from ..errors import MiBrdfsError
+from ..errors import MiBrdfsError, arguments, counts, fraction, valid_direction, valid_seed
 from . import batch
 from .result import CheckResult
 
@@ -126,6 +126,8 @@ def _pilot(bsdf, wi, ctx, n: int):
     return pdf_max * _elongation(core), s.wo[ok].mean(axis=0)
 
 
+@counts("n")
+@arguments(wi=valid_direction)
 def chi2_settings(bsdf, wi, ctx=None, n: int = 20_000):
     """
     ``(res, ires, pdf_max, lobe)`` for a χ² test of ``bsdf`` at ``wi``, from pilot samples of
@@ -158,6 +160,8 @@ def chi2_settings(bsdf, wi, ctx=None, n: int = 20_000):
     raise AssertionError("unreachable")
 
 
+@counts("res", "ires", "sample_count", "test_count")
+@arguments(wi=valid_direction, seed=valid_seed, significance=fraction)
 def chi2_bsdf(bsdf, wi=(0.0, 0.0, 1.0), ctx=None, res: int | None = 101, ires: int | None = 4,
               sample_count: int = 1_000_000, seed: int = 0, significance: float = 0.01,
               test_count: int = 1, rotate: bool = True) -> CheckResult:

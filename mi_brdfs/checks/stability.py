@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf
-from ..errors import MiBrdfsError, counts
+from ..errors import MiBrdfsError, arguments, counts, nonempty_specs, valid_seed
 from . import batch
 from .result import CheckResult
 
@@ -89,6 +89,7 @@ def _count(name: str, values: np.ndarray, labels, row: StabilityRow) -> None:
 
 
 @counts("n_random")
+@arguments(seed=valid_seed)
 def sweep_one(spec, n_random: int | None = None, seed: int = 0) -> StabilityRow:
     """Every stress direction and ``n_random`` random pairs/samples for one parameter set."""
     row = StabilityRow(spec)
@@ -144,6 +145,7 @@ def parameter_grid(base: dict, **axes) -> list[dict]:
 
 
 @counts("n_random")
+@arguments(specs=nonempty_specs, seed=valid_seed)
 def check_stability(specs, n_random: int | None = None, seed: int = 0) -> CheckResult:
     """
     The sweep over ``specs`` (one spec or a list, e.g. from :func:`parameter_grid`): passes when

@@ -126,7 +126,11 @@ def write_json(result: FitResult, path) -> str:
 
     from ..imageio import atomic_path
 
+    from ..errors import ParameterError
+
     path = os.fspath(path)
+    if not path.lower().endswith(".json"):
+        raise ParameterError("fit.write_json", "path", path, "must end in .json")
     with atomic_path(path, ".json") as tmp, open(tmp, "w") as f:
         json.dump(result.to_json(), f, indent=1)
         f.write("\n")

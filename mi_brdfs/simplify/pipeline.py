@@ -12,7 +12,7 @@ import re
 import time
 from pathlib import Path
 
-from ..errors import MiBrdfsError, counts, mitsuba_error_line
+from ..errors import MiBrdfsError, ParameterError, counts, mitsuba_error_line
 from ..variants import keeps_variant
 from .candidates import _cached_fit, candidates_for
 from .choose import _choose, _derive, _predict
@@ -143,6 +143,9 @@ def _read(scene, output, report) -> tuple:
 
     path = scene_path(scene)
     data = path.read_bytes()
+    if output is not None and Path(output).suffix.lower() != ".xml":
+        raise ParameterError("simplify", "output", str(output),
+                             "must end in .xml (the simplified scene is an XML file)")
     out = check_writable(output) if output is not None else None
     if out is not None and out.resolve() == path.resolve():
         raise MiBrdfsError(f"simplify: the output {out} is the scene itself: write the "
