@@ -296,3 +296,37 @@ def test05_bad_input_one_line_exit_2(tmp_path, tmp_path_factory, monkeypatch, ar
 def test06_api_tolerance(tmp_path, tolerance):
     with pytest.raises(MiBrdfsError, match="tolerance .* is invalid: must be a finite number > 0"):
         simplify(write_scene(tmp_path), tolerance, cache=False)
+
+
+@pytest.mark.parametrize("ratios,kept", [((0.99, 0.991, 1.10), False), ((0.5, 0.52, 0.51), True)],
+                         ids=["noisy-around-1", "consistently-faster"])
+def test07_speedup_bars_from_the_spread_of_repeats(tmp_path, monkeypatch, ratios, kept):
+    """
+    Faked timings (the interleaved timing renders' seconds replaced; the images are real): the
+    candidate/original ratio of each repeat is ``ratios``. Noisy around 1, two repeats agreeing
+    by chance once gave bars of a tenth of a percent and a replacement that a rerun found
+    slower: now the bars follow the spread of the repeats, and the candidate is not kept. A
+    candidate consistently twice as fast is.
+    """
+    from mi_brdfs.simplify import measure
+
+    mi_brdfs.use_variant("llvm_ad_rgb")
+    real = measure._Engine._render
+
+    def faked(self, scene, text, seed, spp):
+        image, seconds = real(self, scene, text, seed, spp)
+        if seed >= 1000:  # the timing repeats (seeds 1000, 1001, ...): original 1 s
+            seconds = 1.0 if text == self.data else ratios[(seed - 1000) % len(ratios)]
+        return image, seconds
+
+    monkeypatch.setattr(measure._Engine, "_render", faked)
+    result = simplify(write_scene(tmp_path), TOLERANCE, cache=False, fits=False, repeats=3,
+                      **SMALL)
+    (ball,) = result.materials
+    diffuse = next(c for c in ball.candidates if c.label == "diffuse")
+    assert diffuse.within and diffuse.measured["timing_ratios"] == pytest.approx(ratios)
+    spread = float(np.std(np.log(ratios), ddof=1))
+    assert diffuse.measured["cost_ratio_se"] >= spread / math.sqrt(3), diffuse.measured
+    assert (ball.chosen != 0) == kept, result.summary()
+    if not kept:
+        assert diffuse.verdict == "within, not measurably faster", diffuse.verdict

@@ -60,7 +60,9 @@ is
     T = V / (τ² − bias²)        (infinite when bias ≥ τ),
 
 and the speed-up of a candidate is T(original)/T(candidate), with a standard error from the
-spread of the timing ratios and of the per-pixel variance differences.
+repeat-to-repeat spread of the timing ratios (their sample standard deviation, from 3 repeats
+or more: with fewer the error is unknown and no candidate counts as measurably faster) and of
+the per-pixel variance differences.
 
 **Choice** (:mod:`.choose`, :mod:`.pipeline`). Per material, the candidate with the least T
 among those with bias_hi ≤ τ, and only when its speed-up exceeds 1 by ``confidence`` standard

@@ -28,7 +28,7 @@ from ..errors import MiBrdfsError, mitsuba_error_line
 MAX_SEEDS = 16
 
 #: Bump when what is measured or how changes: old cache entries are then ignored.
-CACHE_VERSION = 1
+CACHE_VERSION = 2
 
 
 def _key(*parts) -> str:
@@ -251,7 +251,8 @@ class _Engine:
         return record, cached
 
     def _timing(self, scene, text: bytes) -> dict:
-        """Time ratios candidate/original of renders interleaved R C C R R C ..."""
+        """Time ratios candidate/original of renders interleaved R C C R R C ...: their median,
+        and its standard error from their spread (:func:`_median_se`)."""
         spp = self.info()["timing_spp"]
         ratios, ref_times = [], []
         ref_scene = self.ref_scene()
@@ -272,20 +273,26 @@ class _Engine:
                 "timing_ratios": [float(r) for r in ratios]}
 
 
+#: Fewest timing repeats from whose spread a standard error is estimated; with fewer, the
+#: error is unknown (NaN) and no speed-up counts as significant.
+MIN_REPEATS = 3
+
+
 def _median_se(values: np.ndarray) -> float:
     """
-    Standard error of the median of ``values``: 1.25 σ/√n (its efficiency for normal errors),
-    σ from the median absolute deviation (1.4826 MAD, robust to a render slowed by another
-    process) where there are 3 values or more.
+    Standard error of the median of ``values`` (the logs of the per-repeat timing ratios):
+    1.25 s/√n (the median's efficiency for normal errors), s the sample standard deviation of
+    the repeats, i.e. their repeat-to-repeat spread; NaN under :data:`MIN_REPEATS` repeats.
+
+    Not a robust σ such as the median absolute deviation: of three repeats, two that agree by
+    chance make the MAD nearly 0 whatever the third says, and bars that small declared a
+    replacement faster that a rerun found slower. A render slowed by another process widens
+    these bars instead, which keeps the original: the safe side.
     """
     n = len(values)
-    if n < 2:
+    if n < MIN_REPEATS:
         return math.nan
-    if n < 3:
-        sigma = float(np.std(values, ddof=1))
-    else:
-        sigma = 1.4826 * float(np.median(np.abs(values - np.median(values))))
-    return 1.25 * sigma / math.sqrt(n)
+    return 1.25 * float(np.std(values, ddof=1)) / math.sqrt(n)
 
 
 def _seed(seedset: str, index: int) -> int:

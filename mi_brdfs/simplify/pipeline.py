@@ -17,7 +17,8 @@ from ..variants import keeps_variant
 from .candidates import _cached_fit, candidates_for
 from .choose import _choose, _derive, _predict
 from .measure import (
-    CACHE_VERSION, MAX_SEEDS, _Cache, _Engine, _key, _original_numbers, default_cache_dir,
+    CACHE_VERSION, MAX_SEEDS, MIN_REPEATS, _Cache, _Engine, _key, _original_numbers,
+    default_cache_dir,
 )
 from .report import Candidate, MaterialResult, SimplifyResult, plot, write_report
 from .scene import element_text, scene_bsdfs, splice
@@ -80,7 +81,8 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
     overrides. ``cache``: True (``report/cache`` or :func:`default_cache_dir`), a folder, or
     False. ``confidence``: standard errors by which a speed-up must exceed 1 to replace a
     material (0: any estimated gain). ``fits``: also fit cheaper models. ``repeats``: timing
-    pairs per candidate.
+    pairs per candidate (3 or more, else no speed-up has a standard error: none counts as
+    measurably faster but with ``confidence`` 0).
 
     Returns → :class:`SimplifyResult`. Raises MiBrdfsError (one line) for bad input.
     """
@@ -96,6 +98,9 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
     level = 1 if quick else 0
     spp = spp or SPP[level]
     repeats = repeats or REPEATS[level]
+    if repeats < MIN_REPEATS and confidence > 0:
+        notes.append(f"{repeats} timing repeats give no standard error (3 or more do): no "
+                     f"candidate counts as measurably faster")
     values = dict(scene_defaults, **defines)
     store, engine = _engine(path, data, report_dir, cache, variant, defines, spp, repeats, level)
     fit_fn = _cached_fit(store, FIT_SIZES[level])
