@@ -44,7 +44,7 @@ def test03_albedo_curve_equals_brute_force_quadrature(form, lobe):
     """
     The lobe-aligned quadrature against a plain 512² Gauss-Legendre × midpoint grid of brdf()
     (which resolves lobes up to n ≈ 10): equal to 2e-6 at normal, oblique and grazing incidence.
-    The tolerance is the plain grid's error (measured against 1024²).
+    The tolerance is the plain grid's own error (its difference from a 1024² grid).
     """
     for n in (1.0, 10.0):
         model = Phong(0.3, 0.7, n, form, lobe)

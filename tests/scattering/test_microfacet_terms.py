@@ -53,7 +53,8 @@ def test01_d_and_g1_are_mitsubas(variant_llvm_ad_rgb, np_rng, kind, alpha):
 def test02_exact_g1_vs_mitsubas_approximation(variant_llvm_ad_rgb, np_rng):
     """
     GGX: Mitsuba's G1 is exact. Beckmann: Walter's rational approximation departs from the
-    exact (erf) G1 by at most 0.35 % (measured: 0.313 %), and by more than 0.1 % somewhere.
+    exact (erf) G1 by at most 0.35 % (Walter et al. 2007's bound), and by more than 0.1 %
+    somewhere.
     """
     m, v = vec(normals(np_rng, 20_000, 0.3)), vec(random_directions(np_rng, 40_000, lower=False))
     a = mi.Float(0.3)
@@ -109,7 +110,7 @@ def test05_ndf_normalised_and_weak_white_furnace(variant_llvm_ad_rgb, kind, alph
     """
     ∫ D cosθ dω = 1 and Heitz's weak white furnace = 1 within 1e-3 for both distributions and
     both masking functions (exact Smith, V-cavity), in float32 (the package's terms) and float64
-    (the reference); measured within 4e-6 of 1 everywhere.
+    (the reference).
     """
     D64 = lambda m: ref.ndf(kind, alpha, m)
     masks = {"smith": lambda v, m: ref.smith_g1(kind, alpha, v, m), "vcavity": ref.vcavity_g1}
