@@ -252,3 +252,66 @@ def test10_cli_bad_input_exit_2_one_line(variant_llvm_ad_rgb, tmp_path, monkeypa
     monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
     cli_one_line_error(args, message)
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+#: Fits that are useless or unphysical, and a word of each flag (small sizes: about 1 s each).
+FLAGGED = {
+    "worse than zero": ("lambert reflectance=0.5", "phong lobe=mirror diffuse_reflectance=0 "
+                        "specular_reflectance=0.5 exponent=1e5", "specular_reflectance",
+                        ["residual", "≥ 1, the zero model's", "objective"]),
+    "at a bound": ("roughconductor alpha=0.05 material=Ag", "lambert", None,
+                   ["reflectance = 1 is at the upper bound 1 of its range"]),
+    "more out than in": ("phong diffuse_reflectance=0.7 specular_reflectance=0.6 exponent=20",
+                         "phong diffuse_reflectance=0.5 specular_reflectance=0.2 exponent=20",
+                         "diffuse_reflectance,specular_reflectance",
+                         ["diffuse_reflectance + specular_reflectance = 1.3",
+                          "albedo E(θ) reaches"]),
+}
+TINY = dict(pairs=1024, steps=100, thetas_deg=(0.0, 45.0), starts="given")
+
+
+@pytest.mark.parametrize("case", list(FLAGGED))
+def test11_useless_or_unphysical_fits_are_flagged(variant_llvm_ad_rgb, case):
+    """The result says so (flags, summary, JSON) where it once reported such fits without a
+    word: a residual far above the zero model's, ρ = 1, ρd + ks > 1 for phong."""
+    target, model, free, words = FLAGGED[case]
+    result = fit(target, model, free, **TINY)
+    text = " | ".join(result.flags)
+    for word in words:
+        assert word in text, text
+    assert all(f"WARNING: {f}" in result.summary() for f in result.flags)
+    assert result.to_json()["flags"] == result.flags
+
+
+def test12_an_exact_fit_has_no_flag(variant_llvm_ad_rgb):
+    """The flags are not noise: a target the model reproduces is not flagged, even at a bound
+    (ρ = 1 of a white lambert) or with a lobe at 0."""
+    assert fit("lambert reflectance=0.3,0.5,0.7", "lambert", **TINY).flags == []
+    assert fit("diffuse reflectance=1", "lambert", **TINY).flags == []
+
+
+def test13_a_diverged_start_is_flagged(variant_llvm_ad_rgb, monkeypatch):
+    """One start whose objective is NaN (faked): the best of the others is returned, flagged."""
+    from mi_brdfs.fit import optimise
+
+    real, calls = optimise._run, []
+
+    def first_diverges(*args, **kwargs):
+        values, loss = real(*args, **kwargs)
+        calls.append(loss)
+        return values, (math.nan if len(calls) == 1 else loss)
+
+    monkeypatch.setattr(optimise, "_run", first_diverges)
+    result = fit("cooktorrance alpha=0.2 fresnel=none", "cooktorrance fresnel=none alpha=0.5",
+                 "alpha", pairs=1024, steps=50, thetas_deg=(0.0,))
+    assert len(calls) == 2 and math.isfinite(result.loss)
+    assert "the start 'given' diverged (objective nan)" in result.flags, result.flags
+
+
+def test14_cli_shows_the_flags(variant_llvm_ad_rgb, tmp_path, monkeypatch, capsys):
+    target, model, free, words = FLAGGED["worse than zero"]
+    code, out = _main(["fit", target, "--model", model, "--free", free, "--pairs", "1024",
+                       "--steps", "100", "-o", "fit.json"], tmp_path, monkeypatch, capsys)
+    assert code == 0, out.err
+    doc = json.loads((tmp_path / "fit.json").read_text())
+    assert doc["flags"] and all(f"WARNING: {f}" in out.out for f in doc["flags"])

@@ -330,3 +330,20 @@ def test07_speedup_bars_from_the_spread_of_repeats(tmp_path, monkeypatch, ratios
     assert (ball.chosen != 0) == kept, result.summary()
     if not kept:
         assert diffuse.verdict == "within, not measurably faster", diffuse.verdict
+
+
+def test08_a_flagged_fit_is_no_candidate(variant_llvm_ad_rgb):
+    """A ward whose glossy lobe is the weaker gets a fitted lambert as a candidate; that fit
+    ends at ρ = 1 (flagged: at the bound of its range), so it is listed as not offered, with
+    the flag, instead of being measured as a replacement."""
+    from mi_brdfs.simplify import FIT_SIZES, candidates, candidates_for, measure
+
+    data = (b'<scene version="3.0.0"><bsdf type="ward" id="w">'
+            b'<rgb name="diffuse_reflectance" value="0.4"/></bsdf></scene>')
+    (material,), _ = scene_bsdfs(data)
+    fit_fn = candidates._cached_fit(measure._Cache(None), FIT_SIZES[1])
+    fits = [c for c in candidates_for(material, {}, fit_fn) if c[1] == "fit"]
+    assert len(fits) == 1, fits
+    label, _, element, note = fits[0]
+    assert element is None and note.startswith("fit not offered: reflectance = 1 is at the "
+                                               "upper bound 1"), (label, note)

@@ -95,7 +95,8 @@ much slower per step.
 
 **Modules.** :mod:`~mi_brdfs.fit.parameters` (which parameters are fitted, their ranges and
 starts), :mod:`~mi_brdfs.fit.optimise` (the pairs, the objective, Adam),
-:mod:`~mi_brdfs.fit.result` (:class:`FitResult`, its JSON file and plot) and
+:mod:`~mi_brdfs.fit.result` (:class:`FitResult`, its JSON file and plot),
+:mod:`~mi_brdfs.fit.flags` (what makes a fit useless or unphysical) and
 :mod:`~mi_brdfs.fit.spec` (the fitted BSDF as written); :func:`fit` here.
 """
 
@@ -108,6 +109,7 @@ import numpy as np
 
 from ..errors import MiBrdfsError, counts
 from ..variants import keeps_variant
+from .flags import fit_flags
 from .optimise import EPSILON, _best, _require_ad_rgb, _run_starts, _target_values, direction_pairs
 from .parameters import (
     WIDTHS, Parameter, _parameters, _prepare_model, _starts, _written, beckmann_width,
@@ -156,7 +158,10 @@ def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: f
     be one; ``llvm_ad_rgb`` when none is set). The caller's variant is set again on return,
     and when the fit raises (:func:`mi_brdfs.variants.variant_kept`).
 
-    Returns → :class:`FitResult`. Raises MiBrdfsError (one line) for bad input.
+    Returns → :class:`FitResult`, whose ``flags`` say in words what makes the fit useless or
+    unphysical (:mod:`~mi_brdfs.fit.flags`: a parameter at a bound, no better than the zero
+    model, a diverged start, an albedo above 1); empty when nothing does. Raises MiBrdfsError
+    (one line) for bad input.
     """
     import drjit as dr
     import mitsuba as mi
@@ -189,7 +194,8 @@ def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: f
     fitted, written = _written(params, values, spec)
     dr.sync_thread()
     figures = _figures(target_bsdf, fitted, wi, wo, target_values, thetas)
+    flags = fit_flags(params, written, fitted, runs, best, figures, wi, target_values)
     return FitResult(target=target, model=model, spec=fitted, parameters=written, loss=loss,
                      start=best, starts={label: r[1] for label, r in runs.items()},
                      pairs=len(wi), steps=steps, seed=seed, variant=variant,
-                     seconds=time.perf_counter() - clock, notes=notes, **figures)
+                     seconds=time.perf_counter() - clock, notes=notes, flags=flags, **figures)

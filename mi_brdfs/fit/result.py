@@ -18,7 +18,8 @@ ALBEDO_THETAS = (0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 75.0, 80.0, 84.26, 87.0, 89.
 @dataclass
 class FitResult:
     """What :func:`~mi_brdfs.fit.fit` found; ``parameters``: the free ones as written back
-    (float, [r, g, b])."""
+    (float, [r, g, b]); ``flags``: what makes the fit useless or unphysical, one line each
+    (:mod:`~mi_brdfs.fit.flags`; empty when nothing does)."""
 
     target: object
     model: dict
@@ -40,6 +41,7 @@ class FitResult:
     variant: str
     seconds: float
     notes: list = field(default_factory=list)
+    flags: list = field(default_factory=list)
 
     def command_line(self) -> str:
         """The fitted BSDF as a command-line spec (``plugin key=value ...``)."""
@@ -59,7 +61,7 @@ class FitResult:
                 "fitted": self.command_line(),
                 "xml": self.xml(), "objective": self.loss, "start": self.start,
                 "variant": self.variant, "pairs": self.pairs, "steps": self.steps,
-                "seed": self.seed}
+                "seed": self.seed, "flags": list(self.flags)}
 
     def summary(self) -> str:
         """The printed report: fitted values, residual, albedo error, command line and XML."""
@@ -78,6 +80,7 @@ class FitResult:
             lines.append("starts        " + ", ".join(f"{label}: objective {loss:.4g}"
                                                       for label, loss in self.starts.items()))
         lines += [f"note: {n}" for n in self.notes]
+        lines += [f"WARNING: {f}" for f in self.flags]
         lines.append(f"fitted BSDF   {self.command_line()}")
         lines.append(self.xml())
         return "\n".join(lines)

@@ -195,8 +195,14 @@ def candidates_for(material: Material, values: dict, fit_fn) -> list:
     return out
 
 
+#: The start of the note of a fit that is not offered as a candidate (its flags follow).
+NOT_OFFERED = "fit not offered"
+
+
 def _fit(target: dict, model: dict, free, sizes: dict):
-    """(fitted spec, residual, albedo error) of :func:`mi_brdfs.fit.fit`, in an AD variant."""
+    """(fitted spec, residual, albedo error) of :func:`mi_brdfs.fit.fit`, in an AD variant; a
+    note why not (a str) for a fit with flags (:mod:`mi_brdfs.fit.flags`): a fit at a bound,
+    no better than the zero model or unphysical is no candidate."""
     import drjit as dr
     import mitsuba as mi
 
@@ -208,6 +214,8 @@ def _fit(target: dict, model: dict, free, sizes: dict):
         raise MiBrdfsError("fits need llvm_ad_rgb, which this machine lacks")
     # fit hands this variant back when it returns or raises
     result = fit(target, model, free, variant=None if ad else "llvm_ad_rgb", **sizes)
+    if result.flags:
+        return f"{NOT_OFFERED}: " + "; ".join(result.flags)
     return result.spec, result.residual, result.albedo_error
 
 
@@ -219,13 +227,13 @@ def _cached_fit(store, fit_sizes: dict):
     from .. import __version__
 
     def fit_fn(target, model, free):
-        key = _key("fit", target, model, free, fit_sizes, __version__)
+        key = _key("fit", target, model, free, fit_sizes, __version__, "flags")
         record = store.get(key)
         if record is not None:
             return record["result"] if "result" in record else record["note"]
         try:
             result = _fit(target, model, free, fit_sizes)
-            stored = {"result": result}
+            stored = {"note": result} if isinstance(result, str) else {"result": result}
         except MiBrdfsError as e:
             result = f"fit failed: {e}"
             stored = {"note": result}

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+from .candidates import NOT_OFFERED
 from .report import Candidate, MaterialResult, _ratio
 
 
@@ -50,7 +51,7 @@ def _choose(r: MaterialResult, tolerance: float, confidence: float) -> None:
     best = None
     for c in r.candidates[1:]:
         if not c.ok:
-            c.verdict = "failed"
+            c.verdict = "not offered" if (c.error or "").startswith(NOT_OFFERED) else "failed"
             continue
         if c.measured.get("nonfinite"):
             c.verdict = "non-finite pixel values"
