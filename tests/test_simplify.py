@@ -304,7 +304,7 @@ def test07_speedup_bars_from_the_spread_of_repeats(tmp_path, monkeypatch, ratios
     """
     Faked timings (the interleaved timing renders' seconds replaced; the images are real): the
     candidate/original ratio of each repeat is ``ratios``. Noisy around 1, two repeats agreeing
-    by chance once gave bars of a tenth of a percent and a replacement that a rerun found
+    by chance once gave bars far narrower than the spread, and a replacement that a rerun found
     slower: now the bars follow the spread of the repeats, and the candidate is not kept. A
     candidate consistently twice as fast is.
     """
@@ -347,3 +347,89 @@ def test08_a_flagged_fit_is_no_candidate(variant_llvm_ad_rgb):
     label, _, element, note = fits[0]
     assert element is None and note.startswith("fit not offered: reflectance = 1 is at the "
                                                "upper bound 1"), (label, note)
+
+
+#: Every form Mitsuba's XML allows for a material's parameters and place: rgb, spectrum,
+#: textures, <ref>s to textures and to BSDFs, $defaults, wrappers (twosided, blendbsdf, mask),
+#: a type chosen by a <default>, a built-in.
+FORMS = b"""<scene version="3.0.0">
+    <default name="a" value="0.3"/>
+    <default name="mat" value="lambert"/>
+    <texture type="checkerboard" id="checks"/>
+    <bsdf type="cooktorrance" id="ct_rgb">
+        <rgb name="diffuse_reflectance" value="0.2, 0.3, 0.4"/>
+        <float name="alpha" value="$a"/>
+    </bsdf>
+    <bsdf type="cooktorrance" id="ct_spectrum">
+        <spectrum name="diffuse_reflectance" value="0.2"/>
+        <spectrum name="specular_reflectance" value="400:0.5, 700:0.7"/>
+    </bsdf>
+    <bsdf type="phong" id="ph_texture">
+        <texture type="checkerboard" name="diffuse_reflectance"/>
+        <rgb name="specular_reflectance" value="0.3"/>
+    </bsdf>
+    <bsdf type="ward" id="ward_ref"><ref name="diffuse_reflectance" id="checks"/></bsdf>
+    <bsdf type="twosided" id="two"><ref id="ct_rgb"/></bsdf>
+    <bsdf type="blendbsdf" id="blend">
+        <float name="weight" value="0.5"/>
+        <bsdf type="orennayar"><rgb name="reflectance" value="0.5"/></bsdf>
+        <bsdf type="mask"><float name="opacity" value="0.5"/><bsdf type="lambert"/></bsdf>
+    </bsdf>
+    <bsdf type="$mat" id="chosen"/>
+    <bsdf type="diffuse" id="builtin"/>
+</scene>"""
+
+
+def test09_every_xml_form_gets_candidates_or_a_reason(variant_llvm_ad_rgb):
+    """
+    simplify's candidates of every material of FORMS (no rendering): a cooktorrance whose
+    diffuse_reflectance is an <rgb> once ended in a TypeError; now every material gets its
+    candidates (the fits included), or the reason it has none.
+    """
+    materials, defaults = scene_bsdfs(FORMS)
+    fits = []
+    notes = []
+    plans = simplify_pipeline._plans(materials, defaults,
+                                     lambda *job: fits.append(job) or "fit skipped", notes)
+    assert not notes, notes
+    got = {mat.label: (cands, reason) for mat, cands, reason in plans}
+    for label in ("ct_rgb", "ct_spectrum", "ph_texture", "orennayar in blend",
+                  "lambert in mask in blend"):
+        cands, reason = got[label]
+        assert cands and not reason, (label, reason)
+    assert {c[0] for c in got["ct_rgb"][0]} >= {"fresnel=schlick", "phong (fit)"}
+    rho = next(model for target, model, _ in fits if target.get("alpha") == 0.3)
+    assert rho["diffuse_reflectance"] == {"type": "rgb", "value": [0.2, 0.3, 0.4]}
+    reasons = {label: reason for label, (cands, reason) in got.items() if not cands}
+    assert reasons["two"].startswith("a wrapper of ct_rgb (<ref>)"), reasons
+    assert reasons["blend"].startswith("a wrapper") and reasons["mask in blend"].startswith(
+        "a wrapper"), reasons
+    assert "its type is $mat, chosen by a <default>" in reasons["chosen"], reasons
+    assert reasons["builtin"] == "a built-in of Mitsuba: no cheaper candidate", reasons
+    assert "cannot read checks (a <ref> to an object defined apart)" in reasons["ward_ref"]
+
+
+MATERIAL_FILE = """<scene version="3.0.0">
+    <bsdf type="lambert" id="inc"><rgb name="reflectance" value="0.5, 0.4, 0.3"/></bsdf>
+</scene>"""
+
+
+def test10_materials_of_included_files_are_named(tmp_path):
+    """simplify edits the scene file only: the materials of an <include>d file were skipped
+    without a word, or the scene declared to have no <bsdf>; now each included file with
+    materials is named, in the error or in the notes of the summary."""
+    (tmp_path / "mat.xml").write_text(MATERIAL_FILE)
+    text = TINY.replace("CARD", '    <include filename="mat.xml"/>\n')
+    only = tmp_path / "only.xml"
+    only.write_text(text.replace('<bsdf type="lambert" id="ball">', '<ref id="inc"/><!--')
+                    .replace("</bsdf>\n    </shape>", "-->\n    </shape>"))
+    with pytest.raises(MiBrdfsError, match=r"only.xml has no <bsdf> of its own, nothing to "
+                                           r"simplify: materials in included file mat.xml "
+                                           r"\(inc \(lambert\)\): left alone"):
+        simplify(only, TOLERANCE, cache=False)
+    mixed = tmp_path / "mixed.xml"
+    mixed.write_text(text)
+    result = simplify(mixed, TOLERANCE, cache=False, fits=False, variant="llvm_ad_rgb", **SMALL)
+    assert [m.label for m in result.materials] == ["ball"]
+    assert "note: materials in included file mat.xml (inc (lambert)): left alone (simplify " \
+           "edits the scene file only" in result.summary()

@@ -26,7 +26,14 @@ inside ``twosided``, ``blendbsdf``, ``mask``, ... are found too):
   ``orennayar`` and for a ``phong``/``ward`` whose glossy lobe is the weaker, a Blinn-Phong
   ``phong`` for an isotropic ``cooktorrance``.
 
-Built-ins (``diffuse``, ``roughconductor``, ...) get no candidates: they are listed as kept.
+Built-ins (``diffuse``, ``roughconductor``, ...) get no candidates: they are listed as kept,
+as are wrappers (their nested BSDFs, inline or by ``<ref>``, are listed apart), a material
+whose ``type`` is a ``$default`` (a replacement measured for one plugin would be wrong for
+another), and plugins of no package, each with its reason. Parameters may take any form
+Mitsuba's XML allows (numbers, ``<rgb>``, ``<spectrum>``, textures, ``<ref>``s, ``$default``
+values); a candidate that needs a value it cannot read (a lobe's albedo, a fit's target) is
+left out, and said so. The materials of ``<include>``d files are left alone (simplify edits the
+scene file only) and named in the notes.
 
 **What is measured, per candidate** (:mod:`.measure`). The scene is rendered with only that
 material replaced (the rest of the XML byte for byte, :mod:`.scene`) at k seeds, as is the

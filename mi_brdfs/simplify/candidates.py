@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import copy
 import math
+import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ..errors import MiBrdfsError
+from ..errors import MiBrdfsError, MiBrdfsWarning
 from .edit import (
     _as_dict, _diffuse_of, _drop, _from_spec, _params, _retyped, _set, _substituted, _zero,
 )
@@ -165,6 +166,33 @@ def _short(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
+def kept_reason(material: Material, fits: bool) -> str:
+    """Why a material has no candidate, in words (the table's "kept: ...")."""
+    from ..registry import builtin_plugin_names
+
+    kind = material.type
+    if not material.leaf:
+        refs = [ref for ref, _ in material.refs]
+        return ("a wrapper: its nested BSDFs are listed apart" if not refs else
+                f"a wrapper of {', '.join(refs)} (<ref>): the BSDFs it references are listed "
+                f"apart (where they are defined in this file)")
+    if "$" in kind:
+        return (f"its type is {kind}, chosen by a <default> or -D: left alone (a replacement "
+                f"measured for one plugin would be wrong for another)")
+    if kind in builtin_plugin_names():
+        return "a built-in of Mitsuba: no cheaper candidate"
+    if kind not in OURS:
+        return (f"{kind} is not a plugin of mi_brdfs ({', '.join(OURS)}): simplify has no "
+                f"candidates for it")
+    reason = "no cheaper candidate applies to this configuration" + ("" if fits else
+                                                                       " (fits off)")
+    named = [ref for ref, name in material.refs if name]
+    if named:
+        reason += (f"; the candidates that need its parameters' values (a lobe left out, a fit) "
+                   f"cannot read {', '.join(named)} (a <ref> to an object defined apart)")
+    return reason
+
+
 def candidates_for(material: Material, values: dict, fit_fn) -> list:
     """
     The candidates of one material: ``(label, kind, element or None, note)`` each, without
@@ -212,8 +240,12 @@ def _fit(target: dict, model: dict, free, sizes: dict):
     ad = dr.is_diff_v(mi.Float) and mi.is_rgb and not mi.is_polarized
     if not ad and not mi_brdfs.llvm_usable():
         raise MiBrdfsError("fits need llvm_ad_rgb, which this machine lacks")
-    # fit hands this variant back when it returns or raises
-    result = fit(target, model, free, variant=None if ad else "llvm_ad_rgb", **sizes)
+    # fit hands this variant back when it returns or raises; the plugins' warnings about the
+    # models it loads on the way (a start whose ρd + ks exceeds 1) are no news to the user:
+    # what matters about the fitted model is in its flags
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MiBrdfsWarning)
+        result = fit(target, model, free, variant=None if ad else "llvm_ad_rgb", **sizes)
     if result.flags:
         return f"{NOT_OFFERED}: " + "; ".join(result.flags)
     return result.spec, result.residual, result.albedo_error

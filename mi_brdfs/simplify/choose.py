@@ -68,8 +68,8 @@ def _choose(r: MaterialResult, tolerance: float, confidence: float) -> None:
             if best is None or c.time_to_tolerance < best.time_to_tolerance:
                 best = c
     if len(r.candidates) == 1:
-        r.reason = ("a wrapper: its nested BSDFs are listed apart" if not r.material.leaf
-                    else "no cheaper candidate (a built-in, or no switch applies)")
+        r.reason = r.reason or ("a wrapper: its nested BSDFs are listed apart"
+                                if not r.material.leaf else "no cheaper candidate")
         return
     if best is None:
         within = [c for c in r.candidates[1:] if c.ok and c.within]

@@ -95,8 +95,16 @@ def _retyped(element, kind: str) -> ET.Element:
 
 
 def _zero(value) -> bool:
-    return value is not None and not isinstance(value, str) and \
-        np.all(np.asarray(value, dtype=float) == 0)
+    """Whether a constant value (a number, [r, g, b], or an ``rgb``/``spectrum`` dict of a
+    spec) is 0 in every channel; False for anything else (a texture, a string, None)."""
+    if isinstance(value, dict):
+        value = value.get("value")
+    if value is None or isinstance(value, (str, bool)):
+        return False
+    try:
+        return bool(np.all(np.asarray(value, dtype=float) == 0))
+    except (TypeError, ValueError):
+        return False
 
 
 def _diffuse_of(element, reflectance_name: str, default: float) -> ET.Element:

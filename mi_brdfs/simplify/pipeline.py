@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ..errors import MiBrdfsError, ParameterError, counts, mitsuba_error_line
 from ..variants import keeps_variant
-from .candidates import _cached_fit, candidates_for
+from .candidates import _cached_fit, candidates_for, kept_reason
 from .choose import _choose, _derive, _predict
 from .measure import (
     CACHE_VERSION, MAX_SEEDS, MIN_REPEATS, _Cache, _Engine, _key, _original_numbers,
@@ -92,9 +92,11 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
     tolerance = _check_tolerance(tolerance)
     if not (isinstance(confidence, (int, float)) and math.isfinite(confidence)):
         raise MiBrdfsError(f"simplify: confidence = {confidence!r} is invalid: must be finite")
-    path, data, out, report_dir, materials, scene_defaults = _read(scene, output, report)
+    path, data, out, report_dir, materials, scene_defaults, included = \
+        _read(scene, output, report, defines)
     variant = _use_variant(variant)
     defines, notes = _defines(path, defines, scene_defaults, quick)
+    notes[:0] = included
     level = 1 if quick else 0
     spp = spp or SPP[level]
     repeats = repeats or REPEATS[level]
@@ -107,7 +109,7 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
 
     # candidates of every material (fits included), then the measurements
     plans = _plans(materials, values, fit_fn if fits else None, notes)
-    total = 2 + sum(len(c) for _, c in plans)
+    total = 2 + sum(len(c) for _, c, _ in plans)
     bar = Progress(total, label=f"simplify {path.name}", unit=" scenes") if progress else None
     try:
         results = _measure(plans, engine, data, tolerance, bar)
@@ -138,10 +140,10 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
     return result
 
 
-def _read(scene, output, report) -> tuple:
+def _read(scene, output, report, defines) -> tuple:
     """
-    (path, bytes, output path or None, report folder or None, materials, ``<default>`` values)
-    of the scene, each checked before any work.
+    (path, bytes, output path or None, report folder or None, materials, ``<default>`` values,
+    notes on the materials of included files) of the scene, each checked before any work.
     """
     from ..imageio import check_writable
     from ..scenes import scene_path
@@ -157,9 +159,45 @@ def _read(scene, output, report) -> tuple:
                            f"simplified scene to another file")
     report_dir = _report_dir(report)
     materials, scene_defaults = scene_bsdfs(data)
+    values = dict(scene_defaults, **{k: str(v) for k, v in (defines or {}).items()})
+    included = _included(path, data, values)
     if not materials:
-        raise MiBrdfsError(f"{path.name} has no <bsdf>: nothing to simplify")
-    return path, data, out, report_dir, materials, scene_defaults
+        raise MiBrdfsError(f"{path.name} has no <bsdf>: nothing to simplify" if not included
+                           else f"{path.name} has no <bsdf> of its own, nothing to simplify: "
+                                f"{'; '.join(included)}")
+    return path, data, out, report_dir, materials, scene_defaults, included
+
+
+def _included(path: Path, data: bytes, values: dict, seen: set | None = None) -> list[str]:
+    """
+    A note for each file the scene ``<include>``s (and they include) that holds a ``<bsdf>``,
+    or that cannot be read: simplify edits the scene file only, and says what it leaves alone.
+    """
+    from .scene import includes
+
+    seen = seen if seen is not None else {path.resolve()}
+    notes = []
+    for name in includes(data):
+        name = re.sub(r"\$(\w+)", lambda m: str(values.get(m.group(1), m.group(0))), name)
+        file = (path.parent / name).resolve()
+        if file in seen:
+            continue
+        seen.add(file)
+        try:
+            text = file.read_bytes()
+            found, _ = scene_bsdfs(text)
+        except (OSError, MiBrdfsError) as e:
+            why = "not found beside the scene" if isinstance(e, FileNotFoundError) else \
+                f"unreadable ({getattr(e, 'strerror', None) or e})"
+            notes.append(f"included file {name}: {why}; any materials in it are left alone")
+            continue
+        if found:
+            listed = ", ".join(f"{m.label} ({m.type})" for m in found if m.parent is None)
+            notes.append(f"materials in included file {name} ({listed}): left alone "
+                         f"(simplify edits the scene file only; copy them into "
+                         f"{path.name} to simplify them)")
+        notes += _included(file, text, values, seen)
+    return notes
 
 
 def _use_variant(variant: str | None) -> str:
@@ -216,16 +254,17 @@ def _engine(path: Path, data: bytes, report_dir: Path | None, cache, variant: st
 
 
 def _plans(materials: list, values: dict, fit_fn, notes: list) -> list:
-    """(material, its candidates) of every material; a material whose candidates fail gets
-    none, and a note."""
+    """(material, its candidates, why it has none or '') of every material; a material whose
+    candidates fail gets none, and a note."""
     plans = []
     for mat in materials:
         try:
             cands = candidates_for(mat, values, fit_fn)
+            reason = "" if cands else kept_reason(mat, fit_fn is not None)
         except MiBrdfsError as e:
-            cands = []
+            cands, reason = [], f"no candidates: {e}"
             notes.append(f"{mat.label}: no candidates ({e})")
-        plans.append((mat, cands))
+        plans.append((mat, cands, reason))
     return plans
 
 
@@ -238,7 +277,7 @@ def _measure(plans: list, engine: _Engine, data: bytes, tolerance: float, bar) -
     if bar:
         bar.update(done, note="the original")
     results = []
-    for mat, cands in plans:
+    for mat, cands, reason in plans:
         entries = [Candidate("original", "original", mat.text)]
         for label, kind, element, note in cands:
             c = Candidate(label, kind, note=note)
@@ -255,7 +294,7 @@ def _measure(plans: list, engine: _Engine, data: bytes, tolerance: float, bar) -
             done += 1
             if bar:
                 bar.update(done, note=f"{mat.label}: {label}"[:50])
-        results.append(MaterialResult(mat, entries))
+        results.append(MaterialResult(mat, entries, reason=reason))
     return results
 
 
@@ -340,8 +379,9 @@ def _write_scene(result: SimplifyResult, out: Path) -> None:
         Path(tmp).write_bytes(result.text)
     result.output = out
     if out.parent.resolve() != result.scene.parent.resolve() and \
-            re.search(rb'name="filename"', result.text):
+            re.search(rb'name="filename"|<include\b', result.text):
         result.notes.append(f"{out} lies in another folder than {result.scene.name}, whose "
-                            f"relative file names (meshes, textures) then resolve elsewhere")
+                            f"relative file names (meshes, textures, included files) then "
+                            f"resolve elsewhere")
         return
     load_scene(out, result.defines)

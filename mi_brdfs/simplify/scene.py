@@ -1,8 +1,8 @@
 """
 The scene file as bytes: every ``<bsdf>`` element with its exact byte span and the scene's
-``<default>`` values (:func:`scene_bsdfs`), byte spans replaced by other text with every other
-byte kept (:func:`splice`), and an element written as text for the place of a material
-(:func:`element_text`).
+``<default>`` values (:func:`scene_bsdfs`), the files it ``<include>``s (:func:`includes`), byte
+spans replaced by other text with every other byte kept (:func:`splice`), and an element
+written as text for the place of a material (:func:`element_text`).
 """
 
 from __future__ import annotations
@@ -29,6 +29,8 @@ class Material:
     text: str
     leaf: bool
     parent: str | None = None
+    #: (id, name or None) of each ``<ref>`` among its children
+    refs: tuple = ()
 
     def element(self) -> ET.Element:
         return ET.fromstring(self.text)
@@ -53,7 +55,9 @@ def scene_bsdfs(data: bytes) -> tuple[list[Material], dict]:
     """
     Every ``<bsdf>`` element of the scene file's bytes, in document order, with its exact byte
     span (comments are skipped: the parser does not report elements inside them), and the
-    scene's ``<default>`` values. Raises MiBrdfsError for XML that does not parse.
+    scene's ``<default>`` values. A ``<bsdf>`` is a leaf when it nests no ``<bsdf>`` and no
+    ``<ref>`` to one (a ``<ref>`` without a name, or to the id of a ``<bsdf>``: a wrapper such
+    as ``twosided`` may reference its BSDF). Raises MiBrdfsError for XML that does not parse.
     """
     parser = expat.ParserCreate()
     stack: list = []
@@ -74,6 +78,8 @@ def scene_bsdfs(data: bytes) -> tuple[list[Material], dict]:
             entry["parent"] = parents[-1]["label"] if parents else None
         if name == "default" and "name" in attrs:
             defaults[attrs["name"]] = attrs.get("value", "")
+        if name == "ref" and stack and stack[-1]["name"] == "bsdf":
+            stack[-1].setdefault("refs", []).append((attrs.get("id", ""), attrs.get("name")))
         stack.append(entry)
 
     def end(name):
@@ -90,7 +96,8 @@ def scene_bsdfs(data: bytes) -> tuple[list[Material], dict]:
         found.append(Material(label=entry["label"], type=entry["attrs"].get("type", "?"),
                               start=begin, end=stop, line=entry["line"], indent=indent,
                               text=data[begin:stop].decode("utf-8"),
-                              leaf=entry["bsdf_children"] == 0, parent=entry["parent"]))
+                              leaf=entry["bsdf_children"] == 0, parent=entry["parent"],
+                              refs=tuple(entry.get("refs", ()))))
 
     parser.StartElementHandler = start
     parser.EndElementHandler = end
@@ -99,7 +106,23 @@ def scene_bsdfs(data: bytes) -> tuple[list[Material], dict]:
     except expat.ExpatError as e:
         raise MiBrdfsError(f"the scene is not valid XML: {e}") from None
     found.sort(key=lambda m: m.start)
+    ids = {m.label for m in found}
+    for m in found:
+        m.leaf = m.leaf and not any(name is None or ref in ids for ref, name in m.refs)
     return found, defaults
+
+
+def includes(data: bytes) -> list[str]:
+    """The ``filename`` of every ``<include>`` of the scene file's bytes, in document order."""
+    parser = expat.ParserCreate()
+    found: list[str] = []
+    parser.StartElementHandler = lambda name, attrs: found.append(attrs.get("filename", "")) \
+        if name == "include" else None
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as e:
+        raise MiBrdfsError(f"the scene is not valid XML: {e}") from None
+    return found
 
 
 def splice(data: bytes, replacements: dict) -> bytes:
