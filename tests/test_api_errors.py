@@ -129,3 +129,14 @@ def test08_write_json_refuses_another_extension(variant_llvm_ad_rgb, tmp_path):
                                            'invalid: must end in .json'):
         write_json(result, tmp_path / "x.exr")
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.skipif(bool(__import__("drjit").has_backend(__import__("drjit").JitBackend.CUDA)),
+                    reason="a CUDA device is there")
+def test09_use_variant_cuda_without_a_device(variant_scalar_rgb):
+    with pytest.raises(MiBrdfsError) as info:
+        mi_brdfs.use_variant("cuda_ad_rgb")
+    text = str(info.value)
+    assert text.startswith("variant 'cuda_ad_rgb' needs a CUDA device, and this machine has "
+                           "none") and "usable here: scalar_rgb" in text and "\n" not in text
+    assert mi.variant() == "scalar_rgb"
