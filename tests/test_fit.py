@@ -315,3 +315,11 @@ def test14_cli_shows_the_flags(variant_llvm_ad_rgb, tmp_path, monkeypatch, capsy
     assert code == 0, out.err
     doc = json.loads((tmp_path / "fit.json").read_text())
     assert doc["flags"] and all(f"WARNING: {f}" in out.out for f in doc["flags"])
+
+
+def test15_no_pair_above_the_horizon(variant_llvm_ad_rgb):
+    """pairs=1 may keep no pair (about 3/4 are kept): one line, where DrJit's size mismatch
+    came out of the plugin."""
+    with pytest.raises(MiBrdfsError, match="pairs = 1 leaves no direction pair above the "
+                                           "horizon"):
+        fit("lambert", "lambert", pairs=1, seed=5, steps=1, thetas_deg=(0.0,))

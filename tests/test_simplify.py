@@ -277,6 +277,7 @@ BAD = [
     (["simplify", "tiny.xml", "--report", "/proc/x"], "report /proc/x: cannot create the folder"),
     (["simplify", "tiny.xml", "-D", "spp=4"], "tiny.xml declares no <default> for spp"),
     (["simplify", "tiny.xml", "--spp", "0"], "argument --spp: must be at least 1"),
+    (["simplify", "tiny.xml", "-D", "res=0"], "tiny.xml: the film's width is 0"),
 ]
 
 

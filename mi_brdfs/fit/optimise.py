@@ -50,6 +50,9 @@ def _target_values(target, target_bsdf, pairs: int, seed: int, notes: list):
     from ..checks import batch
 
     wi, wo = direction_pairs(pairs, seed)
+    if len(wi) == 0:
+        raise MiBrdfsError(f"fit: pairs = {pairs} leaves no direction pair above the horizon "
+                           f"(about 3/4 of them are kept): give more pairs, e.g. 4096")
     target_values = batch.evaluate(target_bsdf, wi, wo).value
     target_values = np.broadcast_to(target_values, (len(wi), 3)) if target_values.shape[1] == 1 \
         else target_values

@@ -138,7 +138,11 @@ class _Engine:
             import mitsuba as mi
 
             from ..timing import timed
-            seconds, image = timed(lambda: np.array(mi.render(scene, seed=seed, spp=spp)))
+            try:
+                seconds, image = timed(lambda: np.array(mi.render(scene, seed=seed, spp=spp)))
+            except RuntimeError as e:
+                raise MiBrdfsError(f"{self.path.name}: the render failed: "
+                                   f"{mitsuba_error_line(e)}") from None
             return image.astype(np.float64), seconds
         from ..render import render
 

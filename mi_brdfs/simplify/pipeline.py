@@ -21,6 +21,7 @@ from .measure import (
     default_cache_dir,
 )
 from .report import Candidate, MaterialResult, SimplifyResult, plot, write_report
+from ..scenes import _check_film
 from .scene import element_text, scene_bsdfs, splice
 
 #: Settings (full, quick): spp per seed, timing repeats, seconds per timing render, resolution
@@ -96,6 +97,7 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
         _read(scene, output, report, defines)
     variant = _use_variant(variant)
     defines, notes = _defines(path, defines, scene_defaults, quick)
+    _check_film(path.name, data.decode("utf-8", "replace"), defines)
     notes[:0] = included
     level = 1 if quick else 0
     spp = spp or SPP[level]
