@@ -140,3 +140,20 @@ def test09_use_variant_cuda_without_a_device(variant_scalar_rgb):
     assert text.startswith("variant 'cuda_ad_rgb' needs a CUDA device, and this machine has "
                            "none") and "usable here: scalar_rgb" in text and "\n" not in text
     assert mi.variant() == "scalar_rgb"
+
+
+@pytest.mark.parametrize("call,message", [
+    (lambda: fit("lambert", "lambert", seed=-1, **TINY_FIT),
+     'fit.fit: parameter "seed" = -1 is invalid: must be a whole number in [0, 2^32)'),
+    (lambda: fit("lambert", "lambert", pairs=256, steps=2, thetas_deg="0,30"),
+     "fit: thetas_deg = '0,30' is invalid: must be one or more angles within [0, 90]"),
+    (lambda: __import__("mi_brdfs.simplify").simplify.simplify({"type": "scene"}),
+     'simplify: parameter "scene" = {\'type\': \'scene\'} is invalid: must be a scene file'),
+    (lambda: __import__("mi_brdfs.simplify").simplify.simplify("showcase", defines=["res=4"]),
+     'simplify: parameter "defines" = [\'res=4\'] is invalid: must be a dict'),
+], ids=["fit-seed", "fit-thetas-str", "simplify-scene-dict", "simplify-defines-list"])
+def test10_fit_and_simplify_arguments(variant_llvm_ad_rgb, call, message):
+    """Raw ValueError, TypeError or AttributeError from NumPy or Python once."""
+    with pytest.raises(MiBrdfsError) as info:
+        call()
+    assert message in str(info.value) and "\n" not in str(info.value), str(info.value)

@@ -107,7 +107,7 @@ import time
 
 import numpy as np
 
-from ..errors import MiBrdfsError, counts
+from ..errors import MiBrdfsError, arguments, counts, valid_seed
 from ..variants import keeps_variant
 from .flags import fit_flags
 from .optimise import EPSILON, _best, _require_ad_rgb, _run_starts, _target_values, direction_pairs
@@ -128,14 +128,19 @@ def _checked(starts: str, lr: float, thetas_deg) -> np.ndarray:
         raise MiBrdfsError(f"fit: starts = {starts!r} is invalid: must be 'auto' or 'given'")
     if not (isinstance(lr, (int, float)) and math.isfinite(lr) and lr > 0):
         raise MiBrdfsError(f"fit: lr = {lr!r} is invalid: must be a finite number > 0")
-    thetas = np.asarray(thetas_deg, dtype=np.float64).ravel()
-    if thetas.size == 0 or not np.all((thetas >= 0) & (thetas <= 90)):
+    try:
+        thetas = np.asarray(thetas_deg, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        thetas = np.array([np.nan])
+    if isinstance(thetas_deg, str) or thetas.size == 0 \
+            or not np.all((thetas >= 0) & (thetas <= 90)):
         raise MiBrdfsError(f"fit: thetas_deg = {thetas_deg!r} is invalid: must be one or more "
                            f"angles within [0, 90] degrees")
     return thetas
 
 
 @counts("pairs", "steps")
+@arguments(seed=valid_seed)
 @keeps_variant
 def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: float = 0.1,
         seed: int = 0, starts: str = "auto", thetas_deg=ALBEDO_THETAS, variant: str | None = None,

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 import re
 import time
 from pathlib import Path
@@ -150,6 +151,12 @@ def _read(scene, output, report, defines) -> tuple:
     from ..imageio import check_writable
     from ..scenes import scene_path
 
+    if not isinstance(scene, (str, os.PathLike)):
+        raise ParameterError("simplify", "scene", scene, "must be a scene file or the name of "
+                             "a bundled scene (e.g. 'showcase')")
+    if defines is not None and not isinstance(defines, dict):
+        raise ParameterError("simplify", "defines", defines, "must be a dict {name: value} of "
+                             "the scene's <default>s")
     path = scene_path(scene)
     data = path.read_bytes()
     if output is not None and Path(output).suffix.lower() != ".xml":
