@@ -278,6 +278,8 @@ BAD = [
     (["simplify", "tiny.xml", "-D", "spp=4"], "tiny.xml declares no <default> for spp"),
     (["simplify", "tiny.xml", "--spp", "0"], "argument --spp: must be at least 1"),
     (["simplify", "tiny.xml", "-D", "res=0"], "tiny.xml: the film's width is 0"),
+    (["simplify", "tiny.xml", "--confidence", "-1"], "confidence = -1.0 is invalid: must be a "
+                                                     "finite number >= 0"),
 ]
 
 

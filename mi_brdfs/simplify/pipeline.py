@@ -92,8 +92,10 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
 
     clock = time.perf_counter()
     tolerance = _check_tolerance(tolerance)
-    if not (isinstance(confidence, (int, float)) and math.isfinite(confidence)):
-        raise MiBrdfsError(f"simplify: confidence = {confidence!r} is invalid: must be finite")
+    if not (isinstance(confidence, (int, float)) and not isinstance(confidence, bool)
+            and math.isfinite(confidence) and confidence >= 0):
+        raise MiBrdfsError(f"simplify: confidence = {confidence!r} is invalid: must be a finite "
+                           f"number >= 0 (standard errors; 0: any estimated gain)")
     path, data, out, report_dir, materials, scene_defaults, included = \
         _read(scene, output, report, defines)
     variant = _use_variant(variant)
