@@ -11,8 +11,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-#: The variant of the polarized BSDFs (the audit's own variant for the others).
+#: The variant of the polarized BSDFs in an ``llvm_*`` audit (the audit's own variant for the
+#: others); a ``cuda_*`` audit runs them in ``cuda_ad_spectral_polarized``.
 POLARIZED_VARIANT = "llvm_ad_spectral_polarized"
+
+
+def polarized_variant(variant: str) -> str:
+    """The polarized variant of the audit's backend (``llvm`` or ``cuda``)."""
+    return variant.split("_", 1)[0] + POLARIZED_VARIANT[len("llvm"):]
 
 
 @dataclass(frozen=True)
@@ -72,10 +78,21 @@ def _height_map() -> dict:
 
 RC = {"type": "roughconductor"}
 RD = {"type": "roughdielectric"}
+#: The optional factors of the dielectrics, read (and multiplied in) only when given.
+_FACTORS = {"specular_reflectance": 0.8, "specular_transmittance": 0.6}
+SPECULAR_FACTORS = "specular_reflectance=0.8 specular_transmittance=0.6"
+#: The frame wrappers with both of their corrections switched off.
+_NO_FIXES = {"flip_invalid_normals": False, "use_shadowing_function": False}
+NO_FRAME_FIXES = "flip_invalid_normals=false use_shadowing_function=false"
 
 
 def mitsuba_cases() -> list[Case]:
-    """The grid of Mitsuba's built-in BSDFs."""
+    """The grid of Mitsuba's built-in BSDFs (their switches: :mod:`.switches`)."""
+    return _reflectors() + _layered() + _wrappers() + _polarized()
+
+
+def _reflectors() -> list[Case]:
+    """diffuse, the conductors and the dielectrics."""
     c = []
     c += [case("diffuse", "default", {"type": "diffuse"}, quick=True),
           case("diffuse", "textured reflectance", {"type": "diffuse", "reflectance": _checker()})]
@@ -89,9 +106,13 @@ def mitsuba_cases() -> list[Case]:
                       dict(RC, distribution=dist, alpha=0.3, sample_visible=False)))
         c.append(case("roughconductor", f"{dist} αu=0.05 αv=0.3",
                       dict(RC, distribution=dist, alpha_u=0.05, alpha_v=0.3)))
+    c.append(case("roughconductor", "ggx α=0.3 specular_reflectance=0.5",
+                  dict(RC, distribution="ggx", alpha=0.3, specular_reflectance=0.5)))
     c += [case("dielectric", "default (bk7/air)", {"type": "dielectric"}),
-          case("dielectric", "water", {"type": "dielectric", "int_ior": "water"})]
-    c += [case("thindielectric", "default", {"type": "thindielectric"})]
+          case("dielectric", "water", {"type": "dielectric", "int_ior": "water"}),
+          case("dielectric", SPECULAR_FACTORS, dict({"type": "dielectric"}, **_FACTORS))]
+    c += [case("thindielectric", "default", {"type": "thindielectric"}),
+          case("thindielectric", SPECULAR_FACTORS, dict({"type": "thindielectric"}, **_FACTORS))]
     for dist in ("beckmann", "ggx"):
         for a in (0.05, 0.3):
             c.append(case("roughdielectric", f"{dist} α={a}",
@@ -100,13 +121,26 @@ def mitsuba_cases() -> list[Case]:
                       dict(RD, distribution=dist, alpha=0.3, sample_visible=False)))
         c.append(case("roughdielectric", f"{dist} αu=0.05 αv=0.3",
                       dict(RD, distribution=dist, alpha_u=0.05, alpha_v=0.3)))
+    c.append(case("roughdielectric", "ggx α=0.3 " + SPECULAR_FACTORS,
+                  dict(RD, distribution="ggx", alpha=0.3, **_FACTORS)))
+    return c
+
+
+def _layered() -> list[Case]:
+    """plastic, roughplastic, principled, principledthin and hair."""
+    c = []
     c += [case("plastic", "default", {"type": "plastic"}),
-          case("plastic", "nonlinear", {"type": "plastic", "nonlinear": True})]
+          case("plastic", "nonlinear", {"type": "plastic", "nonlinear": True}),
+          case("plastic", "specular_reflectance=0.5",
+               {"type": "plastic", "specular_reflectance": 0.5})]
     c += [case("roughplastic", "default (beckmann α=0.1)", {"type": "roughplastic"}),
           case("roughplastic", "ggx α=0.5", {"type": "roughplastic", "distribution": "ggx",
                                             "alpha": 0.5}, quick=True),
           case("roughplastic", "beckmann α=0.3 nonlinear",
-               {"type": "roughplastic", "alpha": 0.3, "nonlinear": True})]
+               {"type": "roughplastic", "alpha": 0.3, "nonlinear": True}),
+          case("roughplastic", "ggx α=0.5 sample_visible=false specular_reflectance=0.5",
+               {"type": "roughplastic", "distribution": "ggx", "alpha": 0.5,
+                "sample_visible": False, "specular_reflectance": 0.5})]
     c += [case("principled", "default", {"type": "principled"}),
           case("principled", "roughness=0.1", {"type": "principled", "roughness": 0.1},
                quick=True),
@@ -116,11 +150,28 @@ def mitsuba_cases() -> list[Case]:
           case("principled", "clearcoat=1 sheen=1",
                {"type": "principled", "clearcoat": 1.0, "sheen": 1.0}),
           case("principled", "spec_trans=0.7 roughness=0.3",
-               {"type": "principled", "spec_trans": 0.7, "roughness": 0.3})]
+               {"type": "principled", "spec_trans": 0.7, "roughness": 0.3}),
+          case("principled", "flatness=0.5 sheen=1 sheen_tint=0.5 spec_tint=0.5",
+               {"type": "principled", "flatness": 0.5, "sheen": 1.0, "sheen_tint": 0.5,
+                "spec_tint": 0.5})]
     c += [case("principledthin", "default", {"type": "principledthin"}),
           case("principledthin", "roughness=0.1 diff_trans=0.5",
-               {"type": "principledthin", "roughness": 0.1, "diff_trans": 0.5})]
-    c += [case("hair", "default", {"type": "hair"})]
+               {"type": "principledthin", "roughness": 0.1, "diff_trans": 0.5}),
+          case("principledthin", "spec_trans=0.6 roughness=0.3",
+               {"type": "principledthin", "spec_trans": 0.6, "roughness": 0.3}),
+          case("principledthin", "spec_trans=0.4 anisotropic=0.5 spec_tint=0.5 flatness=0.5 "
+               "sheen=1 sheen_tint=0.5",
+               {"type": "principledthin", "spec_trans": 0.4, "anisotropic": 0.5,
+                "spec_tint": 0.5, "flatness": 0.5, "sheen": 1.0, "sheen_tint": 0.5})]
+    c += [case("hair", "default", {"type": "hair"}),
+          case("hair", "sigma_a (no pigmentation)",
+               {"type": "hair", "sigma_a": {"type": "rgb", "value": [0.8, 1.0, 1.4]}})]
+    return c
+
+
+def _wrappers() -> list[Case]:
+    """BSDFs that wrap others: blendbsdf, twosided, mask, bumpmap, normalmap; and null."""
+    c = []
     c += [case("blendbsdf", "diffuse + roughconductor, weight 0.3",
                {"type": "blendbsdf", "weight": 0.3, "a": {"type": "diffuse"},
                 "b": dict(RC, alpha=0.2)}),
@@ -129,22 +180,46 @@ def mitsuba_cases() -> list[Case]:
                                                 "b": {"type": "conductor"}})]
     c += [case("twosided", "diffuse", {"type": "twosided", "bsdf": {"type": "diffuse"}}),
           case("twosided", "roughconductor α=0.3",
-               {"type": "twosided", "bsdf": dict(RC, alpha=0.3)})]
+               {"type": "twosided", "bsdf": dict(RC, alpha=0.3)}),
+          case("twosided", "diffuse + roughconductor α=0.3",
+               {"type": "twosided", "a": {"type": "diffuse"}, "b": dict(RC, alpha=0.3)},
+               quick=True)]
     c += [case("mask", "opacity 0.4 on diffuse",
-               {"type": "mask", "opacity": 0.4, "bsdf": {"type": "diffuse"}})]
+               {"type": "mask", "opacity": 0.4, "bsdf": {"type": "diffuse"}}),
+          case("mask", "textured opacity on diffuse",
+               {"type": "mask", "opacity": _checker(), "bsdf": {"type": "diffuse"}})]
     c += [case("bumpmap", "on roughconductor α=0.3",
                {"type": "bumpmap", "texture": _height_map(), "scale": 0.5,
                 "bsdf": dict(RC, alpha=0.3)}),
+          case("bumpmap", "on roughconductor α=0.3, " + NO_FRAME_FIXES,
+               {"type": "bumpmap", "texture": _height_map(), "scale": 0.5,
+                "bsdf": dict(RC, alpha=0.3), **_NO_FIXES}),
           case("normalmap", "on diffuse", {"type": "normalmap", "normalmap": _normal_map(),
                                            "bsdf": {"type": "diffuse"}}),
+          case("normalmap", "on diffuse, " + NO_FRAME_FIXES,
+               {"type": "normalmap", "normalmap": _normal_map(), "bsdf": {"type": "diffuse"},
+                **_NO_FIXES}),
           case("normalmap", "on roughconductor αu=0.05 αv=0.3 (upstream's)",
                {"type": "normalmap", "normalmap": _normal_map(),
                 "bsdf": dict(RC, alpha_u=0.05, alpha_v=0.3)})]
     c += [case("null", "default", {"type": "null"})]
+    return c
+
+
+def _polarized() -> list[Case]:
+    """The BSDFs that run in the polarized variant."""
+    c = []
     c += [case("pplastic", "default", {"type": "pplastic"}, polarized=True),
+          case("pplastic", "ggx αu=0.05 αv=0.3 sample_visible=false specular_reflectance=0.5",
+               {"type": "pplastic", "distribution": "ggx", "alpha_u": 0.05, "alpha_v": 0.3,
+                "sample_visible": False, "specular_reflectance": 0.5}, polarized=True),
           case("polarizer", "default", {"type": "polarizer"}, polarized=True),
+          case("polarizer", "polarizing=false", {"type": "polarizer", "polarizing": False},
+               polarized=True),
           case("retarder", "default", {"type": "retarder"}, polarized=True),
           case("circular", "default", {"type": "circular"}, polarized=True),
+          case("circular", "left_handed", {"type": "circular", "left_handed": True},
+               polarized=True),
           case("roughconductor", "ggx α=0.3 (polarized variant)",
                dict(RC, distribution="ggx", alpha=0.3), polarized=True),
           case("roughdielectric", "ggx α=0.3 (polarized variant)",

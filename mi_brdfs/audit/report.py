@@ -18,7 +18,11 @@ COLUMNS = (("consistency", "consistency"), ("chi2", "χ² (ours)"),
            ("mitsuba chi2", "χ² (Mitsuba's harness)"), ("energy", "energy"),
            ("albedo", "albedo"), ("lobes", "lobes"), ("pdf integral", "∫ pdf"),
            ("reciprocity", "reciprocity"), ("positivity", "positivity"),
-           ("stability", "stability"), ("load", "loads"), ("crash", "crash"))
+           ("stability", "stability"), ("sides", "sides"), ("load", "loads"),
+           ("crash", "crash"))
+
+#: The variant whose audit the report names when it was made in another one.
+GPU_VARIANT = "cuda_ad_rgb"
 
 MARK = {"pass": "✓", "defect": "**defect**", "check-limitation": "check-lim.",
         "model-property": "model", "statistical": "stat.", "untriaged": "**untriaged**",
@@ -39,7 +43,7 @@ def _column(check: str) -> str:
 
 def findings_list(records: list[dict], table=None) -> list[dict]:
     """One object per record that was judged (skipped checks are left out): bsdf, config,
-    check, verdict, summary, reproducer, source."""
+    check, verdict, summary, reproducer, source, issue, fixed_upstream."""
     out = []
     for r in records:
         if r.get("skipped"):
@@ -50,15 +54,20 @@ def findings_list(records: list[dict], table=None) -> list[dict]:
                     "summary": finding.summary if finding else
                     (r["message"] if verdict != "untriaged" else "UNTRIAGED: " + r["message"]),
                     "reproducer": finding.reproducer if finding else None,
-                    "source": finding.source if finding else None})
+                    "source": finding.source if finding else None,
+                    "issue": finding.issue if finding else None,
+                    "fixed_upstream": finding.fixed_upstream if finding else None})
     return out
 
 
-def _cell(verdicts: list[str]) -> str:
+def _cell(verdicts: list[tuple]) -> str:
+    """The most important (verdict, fixed upstream) of a cell; ⁺ marks a defect that is fixed
+    upstream in every record of the cell that shows it."""
     if not verdicts:
         return ""
-    worst = min(verdicts, key=PRIORITY.index)
-    return MARK[worst]
+    worst = min((v for v, _ in verdicts), key=PRIORITY.index)
+    fixed = worst == "defect" and all(f for v, f in verdicts if v == worst)
+    return MARK[worst] + (" ⁺" if fixed else "")
 
 
 def write(records: list[dict], out: Path, command: str, seconds: float, variant: str,
@@ -75,6 +84,7 @@ def write(records: list[dict], out: Path, command: str, seconds: float, variant:
     lines = _introduction(command, seconds, variant, quick, counts)
     lines += _verdict_table(records, table)
     lines += _finding_sections(records, items, table)
+    lines += _coverage(records)
     lines += _limitations()
     lines += _untriaged(records, table)
     md_path = out / ("MITSUBA_AUDIT-quick.md" if quick else "MITSUBA_AUDIT.md")
@@ -97,7 +107,9 @@ def _introduction(command: str, seconds: float, variant: str, quick: bool,
              "the package's own, over a grid of configurations "
              "([`mi_brdfs/audit/grid.py`](../mi_brdfs/audit/grid.py)), through the battery of "
              "`mi-brdfs check` (consistency, χ² at normal, 45° and grazing incidence, energy, "
-             "albedo agreement, reciprocity, positivity, stability) and Mitsuba's own χ² "
+             "albedo agreement, reciprocity, positivity, stability), the audit's own check of "
+             "BSDFs whose lobes differ by side at back-facing wi (sides: "
+             "[`mi_brdfs/audit/sides.py`](../mi_brdfs/audit/sides.py)) and Mitsuba's own χ² "
              "harness (`mi.chi2.BSDFAdapter`, default resolution). Every failure has one "
              "verdict ([`mi_brdfs/audit/triage.py`](../mi_brdfs/audit/triage.py)): "
              "**defect** (of the BSDF: a standalone reproducer exits 1 while it is present), "
@@ -106,9 +118,65 @@ def _introduction(command: str, seconds: float, variant: str, quick: bool,
              "(a false rejection other seeds do not repeat); ✓ passed, n/a not applicable.", "",
              "Verdicts: " + ", ".join(f"{counts[v]} {v}" for v in (*triage.VERDICTS, "untriaged")
                                       if counts[v]) + ".", ""]
+    lines += _variants(variant)
     if counts["untriaged"]:
         lines += [f"**{counts['untriaged']} failures are not triaged yet** (listed at the end).",
                   ""]
+    return lines
+
+
+def _variants(variant: str) -> list[str]:
+    """Which variants the report ran, and how to run the GPU audit where it did not."""
+    from .grid import polarized_variant
+
+    text = (f"Variants: `{variant}`, and `{polarized_variant(variant)}` for the polarized BSDFs "
+            f"(the configurations marked so). Only these ran.")
+    if not variant.startswith("cuda"):
+        text += (f" **The `{GPU_VARIANT}` audit was not run for this report**, and nothing here "
+                 f"is a result of it: it needs a CUDA GPU. On a machine with one, "
+                 f"`mi-brdfs audit --variant {GPU_VARIANT} --out DIR` runs the same grid "
+                 f"(polarized BSDFs in `{polarized_variant(GPU_VARIANT)}`) and writes "
+                 f"DIR/MITSUBA_AUDIT.md; the reproducers in `validation/audit/` set "
+                 f"`llvm_ad_rgb` and run in a cuda variant by changing that line.")
+    return [text, ""]
+
+
+def _coverage(records: list[dict]) -> list[str]:
+    """Per built-in plugin the report ran, a table of its switches (:mod:`.switches`): the
+    configurations in each state, or why the grid leaves the switch at its default."""
+    from . import grid, switches
+
+    ran = {(r["bsdf"], r["config"]) for r in records}
+    table = switches.coverage([c for c in grid.mitsuba_cases() if (c.bsdf, c.config) in ran])
+    if not table:
+        return []
+    lines = ["## Coverage: the switches of the built-in BSDFs", "",
+             "Every parameter of a built-in BSDF whose value selects a code path of Mitsuba "
+             "3.9.1's plugin ([`mi_brdfs/audit/switches.py`](../mi_brdfs/audit/switches.py)), "
+             "with the configurations of this report in each of its states, read off the "
+             "grid's configurations. Parameters that only change a value (α, η, a colour, a "
+             "sampling rate, a tilt) are not switches.", ""]
+    for plugin, rows in table.items():
+        if not rows:
+            continue
+        every = {c for row in rows for names in row.configs.values() for c in names}
+        lines += [f"### `{plugin}`", "",
+                  "| switch | selects | configurations per state | left at its default: why |",
+                  "|---|---|---|---|"]
+        for row in rows:
+            states = "; ".join(
+                f"{state}: " + ("—" if not row.configs.get(state) else
+                                f"all {len(every)}" if set(row.configs[state]) == every else
+                                ", ".join(row.configs[state]))
+                for state in row.switch.states)
+            why = row.switch.default_only or (
+                f"**not exercised here: {', '.join(row.missing)}**" if row.missing else "")
+            lines.append(f"| `{row.switch.name}` | {row.switch.selects} | {states} | {why} |")
+        lines.append("")
+    plain = [f"`{p}`" for p, rows in table.items() if not rows]
+    if plain:
+        lines += ["No switch (one code path, parameters that are values only): "
+                  + ", ".join(plain) + ".", ""]
     return lines
 
 
@@ -123,8 +191,8 @@ def _verdict_table(records: list[dict], table) -> list[str]:
         key = (r["bsdf"], r["config"])
         if key not in cells:
             order.append(key)
-        v = "skipped" if r.get("skipped") else triage.verdict(r, table)[0]
-        cells[key][_column(r["check"])].append(v)
+        v, finding = ("skipped", None) if r.get("skipped") else triage.verdict(r, table)
+        cells[key][_column(r["check"])].append((v, bool(finding and finding.fixed_upstream)))
     used = [(k, name) for k, name in COLUMNS if any(cells[key][k] for key in order)]
 
     header = ["BSDF", "configuration"] + [name for _, name in used]
@@ -132,8 +200,9 @@ def _verdict_table(records: list[dict], table) -> list[str]:
     for key in order:
         lines.append("| " + " | ".join([f"`{key[0]}`", key[1]] +
                                        [_cell(cells[key][k]) for k, _ in used]) + " |")
-    lines += ["", "Not built standalone: " + "; ".join(f"`{k}` ({why})"
-                                                      for k, why in SKIPPED.items()) + ".", ""]
+    lines += ["", "⁺ fixed upstream after the audited release (the finding says where). Not "
+              "built standalone: " + "; ".join(f"`{k}` ({why})" for k, why in SKIPPED.items())
+              + ".", ""]
     return lines
 
 
@@ -161,6 +230,11 @@ def _finding_sections(records: list[dict], items: list[dict], table) -> list[str
                              f"(exits 1 while the defect is present)")
             if f.source:
                 lines.append(f"- Source: {f.source}")
+            if f.issue:
+                lines.append(f"- Issue text and prior art: [`{f.issue}`](../{f.issue})")
+            if f.verdict == "defect":
+                lines.append("- Fixed upstream: " + (f.fixed_upstream or
+                                                     "no (see the issue text's prior art)"))
             lines.append("- Records: " + "; ".join(sorted(set(by_finding[f]))[:12]))
             lines.append("")
     return lines

@@ -38,6 +38,10 @@ class Finding:
     reproducer: str | None = None  # path relative to the repository root
     source: str | None = None      # where in Mitsuba's source (file, function, lines)
     when: object = None            # a further condition on the record (a function), or None
+    issue: str | None = None       # the issue text with its prior art (validation/audit/upstream)
+    #: where a fix landed upstream after the audited release (a pull request's URL and title,
+    #: and what of the finding it fixes); None: not fixed in the newest upstream code searched
+    fixed_upstream: str | None = None
 
     def covers(self, record: dict) -> bool:
         return ((self.bsdf == "*" or record["bsdf"] == self.bsdf)

@@ -302,7 +302,8 @@ def cmd_audit(args) -> int:
                       processes=args.processes or min(os.cpu_count() or 1, 4),
                       progress=not args.quiet)
     command = "mi-brdfs audit" + (" --quick" if args.quick else "") + \
-        (f" --only {args.only}" if args.only else "")
+        (f" --only {args.only}" if args.only else "") + \
+        (f" --variant {args.variant}" if args.variant != "llvm_ad_rgb" else "")
     md, js, counts = report.write(records, out, command, time.perf_counter() - t0,
                                   args.variant, args.quick)
     print(f"wrote {md} and {js}: " + ", ".join(f"{n} {v}" for v, n in sorted(counts.items())))

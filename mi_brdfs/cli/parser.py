@@ -336,8 +336,9 @@ def _add_audit(sub) -> None:
                     help="report folder (default: the current directory; make audit: "
                          "validation)")
     au.add_argument("--variant", metavar="V", default="llvm_ad_rgb",
-                    help="JIT variant of the audit (default llvm_ad_rgb; polarized BSDFs run in "
-                         "llvm_ad_spectral_polarized)")
+                    help="JIT variant of the audit (default llvm_ad_rgb; cuda_ad_rgb on a "
+                         "machine with a CUDA GPU); polarized BSDFs run in the same backend's "
+                         "*_ad_spectral_polarized")
     au.add_argument("--processes", type=_count, default=None, metavar="N",
                     help="worker processes (default: one per core)")
     au.add_argument("--only", metavar="BSDF[,BSDF]",

@@ -13,14 +13,15 @@ import mitsuba as mi
 import pytest
 
 from conftest import LLVM_OK
-from mi_brdfs.audit import grid, report, triage
+from mi_brdfs.audit import grid, report, switches, triage
 from mi_brdfs.audit.triage import Finding
 
 ROOT = Path(__file__).resolve().parents[2]
 REPRODUCERS = sorted((ROOT / "validation" / "audit").glob("repro_*.py"))
 #: The Mitsuba version the reproducers were written against (they exit 0 once it is fixed).
 AUDITED = "3.9.1"
-KEYS = {"bsdf", "config", "check", "verdict", "summary", "reproducer", "source"}
+KEYS = {"bsdf", "config", "check", "verdict", "summary", "reproducer", "source", "issue",
+        "fixed_upstream"}
 
 
 def _record(bsdf="roughplastic", config="ggx α=0.5", check="chi2 θ=0°", passed=False, **kw):
@@ -45,6 +46,8 @@ def test01_verdicts():
         assert f.verdict in triage.VERDICTS[:-1] and f.summary
         if f.verdict == "defect":
             assert f.reproducer and (ROOT / f.reproducer).is_file() and f.source, f
+            assert f.issue and (ROOT / f.issue).is_file(), f
+            assert "## Prior art" in (ROOT / f.issue).read_text(), f.issue
 
 
 def test02_report(tmp_path):
@@ -59,6 +62,52 @@ def test02_report(tmp_path):
     assert all(set(i) == KEYS for i in items) and counts["defect"] == 1
     text = md.read_text()
     assert "**defect**" in text and "validation/x.py" in text and "a.cpp" in text
+    assert "Fixed upstream: no" in text and "**defect** ⁺" not in text
+    assert f"The `{report.GPU_VARIANT}` audit was not run for this report" in text
+    fixed = [Finding("roughplastic", r"^chi2", "", "defect", "why", "validation/x.py", "a.cpp",
+                     fixed_upstream="https://example.org/pull/1 (title)")]
+    md, js, _ = report.write(records, tmp_path, "mi-brdfs audit", 60.0, "llvm_ad_rgb",
+                             quick=False, table=fixed)
+    text = md.read_text()
+    assert "**defect** ⁺" in text and "Fixed upstream: https://example.org/pull/1" in text
+    assert json.loads(js.read_text())[1]["fixed_upstream"].startswith("https://example.org")
+
+
+def test02b_variants_and_cuda():
+    """The report names the variants it ran; a non-cuda report says the cuda audit was not run
+    and how to run it, a cuda one does not; polarized BSDFs follow the audit's backend."""
+    assert grid.polarized_variant("llvm_ad_rgb") == "llvm_ad_spectral_polarized"
+    assert grid.polarized_variant("cuda_ad_rgb") == "cuda_ad_spectral_polarized"
+    llvm = " ".join(report._variants("llvm_ad_rgb"))
+    cuda = " ".join(report._variants("cuda_ad_rgb"))
+    assert "not run for this report" in llvm and "--variant cuda_ad_rgb" in llvm
+    assert "not run" not in cuda and "`cuda_ad_spectral_polarized`" in cuda
+
+
+def test02c_coverage_table_from_the_grid(tmp_path):
+    """The report's coverage tables come from the grid's configurations: each state of a switch
+    lists the configurations in it, and a state none exercises is flagged."""
+    cases = [c for c in grid.mitsuba_cases() if c.bsdf == "roughconductor" and not c.polarized]
+    records = [_record(bsdf=c.bsdf, config=c.config, check="consistency", passed=True)
+               for c in cases]
+    lines = "\n".join(report._coverage(records))
+    assert "### `roughconductor`" in lines and "| `sample_visible` |" in lines
+    assert "false: beckmann α=0.3 sample_visible=false, ggx α=0.3 sample_visible=false" in lines
+    lines = "\n".join(report._coverage(records[:2]))  # only beckmann α=0.05/0.3 Au
+    assert "**not exercised here: ggx**" in lines
+
+
+def test03b_every_switch_is_exercised_in_every_state():
+    """Every switch of a built-in BSDF in the grid without a reason to stay at its default is
+    exercised in each of its states; taking one configuration away is seen."""
+    cases = grid.all_cases()
+    assert {c.bsdf for c in grid.mitsuba_cases()} <= set(switches.SWITCHES)
+    assert switches.unexercised(cases) == []
+    fewer = [c for c in cases if c.key != "roughconductor | ggx α=0.3 specular_reflectance=0.5"]
+    assert switches.unexercised(fewer) == ["roughconductor: specular_reflectance (given)"]
+    for rows in switches.coverage(cases).values():
+        for row in rows:
+            assert row.switch.states[0] in row.configs or row.switch.default_only is None
 
 
 def test03_grid_names_every_case_once():
