@@ -77,9 +77,9 @@ def run_case(case: grid.Case, variant: str, quick: bool) -> list[dict]:
     from .. import registry
     from ..bsdfspec import to_xml
     from ..checks import run_battery
-    from . import build
+    from . import build, sides
 
-    variant = grid.POLARIZED_VARIANT if case.polarized else variant
+    variant = grid.polarized_variant(variant) if case.polarized else variant
     registry.use_variant(variant, fallback=False)
     t0 = time.perf_counter()
     records = []
@@ -90,6 +90,8 @@ def run_case(case: grid.Case, variant: str, quick: bool) -> list[dict]:
         return [_record(case, variant, CheckResult("load", False, math.nan, "n/a",
                                                    f"does not load: {str(e)[:300]}"))]
     for result in run_battery(bsdf, quick=quick, progress=False):
+        records.append(_record(case, variant, result))
+    for result in sides.check_sides(bsdf, n=2_000 if quick else 20_000):
         records.append(_record(case, variant, result))
     harness = _harness_applies(bsdf, case)
     for theta in MITSUBA_CHI2_THETAS:
@@ -142,8 +144,8 @@ def _code_hash() -> str:
     """A hash of the checks' and the audit runner's source: a cached result is reused only
     while the code that produced it is unchanged."""
     root = Path(__file__).resolve().parents[1]
-    files = sorted((root / "checks").glob("*.py")) + [root / "audit" / "run.py",
-                                                     root / "audit" / "build.py"]
+    files = sorted((root / "checks").glob("*.py")) + [root / "audit" / name for name in
+                                                     ("run.py", "build.py", "sides.py")]
     h = hashlib.sha1()
     for f in files:
         h.update(f.read_bytes())

@@ -1,25 +1,24 @@
 """
 Triage of the wrappers: ``blendbsdf``, ``mask``, ``bumpmap``, ``normalmap``, ``twosided``, ``null``.
 
-Defects of Mitsuba 3.9.1 (each with a reproducer in ``validation/audit/`` that exits 1 while the
-defect is present, and an issue text in ``validation/audit/upstream/``):
+Defects of Mitsuba 3.9.1, one mechanism each (each with a reproducer in ``validation/audit/``
+that exits 1 while the defect is present, and an issue text with its prior art in
+``validation/audit/upstream/``):
 
 * ``blendbsdf`` reports ``bs.sampled_component`` of its second BSDF without the offset its own
   component list and its ``ctx.component`` handling use (``repro_blendbsdf_sampled_component``).
 * ``blendbsdf`` turns a failed nested sample into a NaN weight, because it reads the undefined
   ``bs.pdf``/``bs.wo`` of that sample (``repro_blendbsdf_nan_weight``). No shipped integrator is
   affected (``impact_blendbsdf_nan_weight.py``).
+* ``blendbsdf`` weights the samples of a Dirac lobe blended with a smooth BSDF too low, as if
+  their discrete probability were a density of the mixture (``repro_blendbsdf_delta_weight``,
+  ``render_blendbsdf_delta_weight.py``); the lobe check's additivity of sampled albedos sees it.
 * ``mask`` inverts a context restricted to one of its parts: nested-only returns only Null
   pass-through samples, Null-only returns none (``repro_mask_context``).
-* Found while triaging, with no failing record because no check of the battery looks at it:
-  ``blendbsdf`` weights the samples of a Dirac lobe blended with a smooth BSDF too low (mirror
-  samples 0.963 instead of 1 at normal incidence, albedo 0.870 instead of 0.900, renders 3.3 %
-  too dark; ``repro_blendbsdf_delta_weight``, ``render_blendbsdf_delta_weight.py``,
-  ``upstream/blendbsdf_delta_weight.md``). A check
-  that would see it: the sampled albedo in the default context must equal the sum of the sampled
-  albedos in the Dirac-only and non-Dirac contexts. For this blend that is 0.8705 vs 0.7999 +
-  0.1001; for ``mask`` it is 0.7998 vs 0.5996 + 1.0000; ``plastic`` agrees, 0.5199 = 0.0387 +
-  0.4812.
+* ``twosided`` reports a back-side sample with the nested BSDF's component index
+  (``repro_twosided_back_component``), and maps ``ctx.component`` to the back BSDF wrongly
+  (``repro_twosided_back_selection``); only the audit's own ``sides`` check
+  (:mod:`mi_brdfs.audit.sides`) draws back-facing ``wi``.
 
 Check limitations: the test interaction had no surface tangents (``bumpmap``), float32 rounding
 at grazing angles (``normalmap`` on roughconductor), and Mitsuba's χ² harness, which either
@@ -32,6 +31,8 @@ from ..triage import Finding
 
 _BLEND = "src/bsdfs/blendbsdf.cpp (v3.9.1)"
 _MASK = "src/bsdfs/mask.cpp (v3.9.1)"
+_TWOSIDED = "src/bsdfs/twosided.cpp (v3.9.1)"
+_UP = "validation/audit/upstream/"
 
 FINDINGS = [
     Finding(
@@ -47,7 +48,8 @@ FINDINGS = [
             "every sample reports component 0."),
         reproducer="validation/audit/repro_blendbsdf_delta_weight.py",
         source="src/bsdfs/blendbsdf.cpp, BlendBSDF::sample (the MIS weight of the mixture, "
-               "lines 134-156)"),
+               "lines 134-156)",
+        issue=_UP + "blendbsdf_delta_weight.md"),
     Finding(
         bsdf="blendbsdf", check=r"^lobes$", configs=r"roughconductor", verdict="defect",
         summary=(
@@ -57,7 +59,8 @@ FINDINGS = [
             "sampled_component back up (the consistency entry below; "
             "validation/audit/repro_blendbsdf_sampled_component.py)."),
         reproducer="validation/audit/repro_blendbsdf_sampled_component.py",
-        source="src/bsdfs/blendbsdf.cpp, BlendBSDF::sample lines 146-155"),
+        source="src/bsdfs/blendbsdf.cpp, BlendBSDF::sample lines 146-155",
+        issue=_UP + "blendbsdf_sampled_component.md"),
     # ------------------------------------------------------------------ blendbsdf
     Finding(
         bsdf="blendbsdf", check=r"^consistency$", configs="", verdict="defect",
@@ -78,15 +81,16 @@ FINDINGS = [
             "type. Geometry and polarization play no part, and the result is the same for every "
             "seed and every wi. Impact: no shipped integrator reads sampled_component (v3.9.1), "
             "so renders are unaffected. It misleads user code that re-evaluates or tags the "
-            "sampled lobe. twosided with two different BSDFs has the same missing offset on the "
-            "back side (twosided.cpp lines 136-144), which our check cannot see because it "
-            "samples only wi above the surface. Fix: bs1.sampled_component += "
-            "component_count(bsdf_0)."),
+            "sampled lobe. twosided has the same missing offset on its back side (its 'sides' "
+            "finding). Fix: bs1.sampled_component += component_count(bsdf_0). Reported for "
+            "Mitsuba 2 in 2020 (https://github.com/mitsuba-renderer/mitsuba2/issues/151, "
+            "open)."),
         reproducer="validation/audit/repro_blendbsdf_sampled_component.py",
         source=(f"{_BLEND}: constructor lines 94-97 (m_components = bsdf_0's then bsdf_1's); "
                 "BlendBSDF::sample lines 116-121 (ctx.component offset on the way in) and "
                 "146-155 (bs1 copied into bs without the offset); same offset in eval 167-172, "
-                "pdf 185-190, eval_pdf 205-209")),
+                "pdf 185-190, eval_pdf 205-209"),
+        issue=_UP + "blendbsdf_sampled_component.md"),
     Finding(
         bsdf="blendbsdf", check=r"^stability$", configs=r"roughconductor", verdict="defect",
         summary=(
@@ -116,7 +120,8 @@ FINDINGS = [
         source=(f"{_BLEND}: BlendBSDF::sample lines 146-156 (bs1.pdf and bs1.wo of a failed "
                 "nested sample used in pdf_weighted and result_weighted, lines 149-152) and "
                 "134-144 (the same for bsdf_0); roughconductor.cpp lines 234-266 leave bs.pdf "
-                "and bs.wo unmasked for inactive lanes, which the API allows")),
+                "and bs.wo unmasked for inactive lanes, which the API allows"),
+        issue=_UP + "blendbsdf_nan_weight.md"),
     Finding(
         bsdf="blendbsdf", check=r"^mitsuba chi2", configs=r"textured", verdict="check-limitation",
         summary=(
@@ -142,6 +147,56 @@ FINDINGS = [
             "integrate its pdf accurately. This is a resolution limit of the harness, the same "
             "one the generic harness finding describes.")),
     # ------------------------------------------------------------------ twosided
+    Finding(
+        bsdf="twosided", check=r"^sides$", configs="", verdict="defect",
+        summary=(
+            "A sample on the back side reports the component index of the nested BSDF, not "
+            "twosided's index of that lobe. twosided lists the front BSDF's n0 lobes "
+            "(FrontSide) followed by the back BSDF's (BackSide; the same BSDF again when only "
+            "one is nested), so back lobe c is component n0 + c; sample() hands the nested "
+            "sample back unchanged on the back side, in the one-BSDF branch and in the "
+            "two-BSDF branch, which shifts ctx.component down by n0 on the way in but not "
+            "sampled_component up on the way out (blendbsdf's missing offset, in a wrapper "
+            "that splits by side). At back-facing wi every successful sample reports "
+            "component 0: a FrontSide lobe, and for diffuse + roughconductor one whose flags "
+            "(DiffuseReflection) lack the sampled GlossyReflection. Adding n0 to the component "
+            "of the back-side samples brings every count to 0 for the three configurations "
+            "(repro_twosided_back_component.py), so the missing offset alone explains the "
+            "records. Not a limit of the check: the API's sampled_component is 'the component "
+            "index that was sampled' and twosided's own flags(c) say which side c belongs to; "
+            "the fields are integers of successful samples, the same for every seed. The "
+            "battery's checks draw wi above the surface only, so only this audit check (the "
+            "'sides' column) sees it. Render impact: none in the shipped integrators (none "
+            "reads sampled_component)."),
+        reproducer="validation/audit/repro_twosided_back_component.py",
+        source=(f"{_TWOSIDED}: constructor lines 89-100 (front lobes, then back lobes); "
+                "TwoSidedBRDF::sample lines 124-127 (one BSDF: the nested sample unchanged) "
+                "and 136-144 (two BSDFs: ctx.component -= n0 at 137-138, result copied at "
+                "141-143 without sampled_component += n0)"),
+        issue=_UP + "twosided_back_component.md"),
+    Finding(
+        bsdf="twosided", check=r"^sides selection$", configs="", verdict="defect",
+        summary=(
+            "Selecting a lobe with ctx.component at a back-facing wi samples and evaluates the "
+            "wrong side, because twosided maps ctx.component to the back BSDF wrongly: with one "
+            "nested BSDF it passes ctx.component on unchanged, so a front lobe c < n0 samples "
+            "the back side and the back lobes n0 + c sample and evaluate nothing; with two it "
+            "subtracts n0 in unsigned arithmetic, so the last front lobe (n0 - 1) becomes "
+            "(uint32_t) -1, 'every component', the whole back BSDF. A correct mapping enables "
+            "back lobe c - n0 for c >= n0 and nothing otherwise. twosided's results at "
+            "back-facing wi equal, for every ctx.component, those of the nested BSDF called "
+            "with the component the code passes on, and differ from those with the correct "
+            "one exactly where the records fail (repro_twosided_back_selection.py: "
+            "diffuse + roughconductor, ctx.component = 0: 0.977 of the samples succeed where "
+            "none should; diffuse alone: ctx.component = 0 gives all, 1 none, where the "
+            "reverse is right). One mapping in both branches, one fix. Render impact: none in "
+            "the shipped integrators (none sets ctx.component)."),
+        reproducer="validation/audit/repro_twosided_back_selection.py",
+        source=(f"{_TWOSIDED}: one BSDF, ctx passed unchanged in sample lines 124-127, eval "
+                "159-162, pdf 194-197, eval_pdf 232-235; two BSDFs, 'ctx.component -= "
+                "(uint32_t) m_brdf[0]->component_count()' without a range check in sample "
+                "137-138, eval 171-172, pdf 206-207, eval_pdf 244-245"),
+        issue=_UP + "twosided_back_selection.md"),
     Finding(
         bsdf="twosided", check=r"^mitsuba chi2 θ=84", configs=r"roughconductor",
         verdict="check-limitation",
@@ -187,7 +242,8 @@ FINDINGS = [
         source=(f"{_MASK}: MaskBSDF::sample lines 128-166 (opacity override inverted at lines "
                 "139-140; nested branch 157-164 then never taken for nested-only and always for "
                 "Null-only); compare MaskBSDF::pdf lines 177-193 (nested-only: nested pdf, "
-                "i.e. selection probability 1)")),
+                "i.e. selection probability 1)"),
+        issue=_UP + "mask_context.md"),
     Finding(
         bsdf="mask", check=r"^albedo$", configs="", verdict="defect",
         summary=(
@@ -201,7 +257,8 @@ FINDINGS = [
             "albedos add up in a correct BSDF (E(default) = E(Dirac ctx) + E(non-Dirac ctx): "
             "plastic 0.5199 = 0.0387 + 0.4812). mask breaks that: 0.7998 vs 0.5996 + 1.0000."),
         reproducer="validation/audit/repro_mask_context.py",
-        source=f"{_MASK}: MaskBSDF::sample lines 139-140 (inverted opacity override)"),
+        source=f"{_MASK}: MaskBSDF::sample lines 139-140 (inverted opacity override)",
+        issue=_UP + "mask_context.md"),
     Finding(
         bsdf="mask", check=r"^mitsuba chi2", configs="", verdict="check-limitation",
         summary=(
@@ -215,6 +272,20 @@ FINDINGS = [
             "1). Mitsuba's default context is correct for mask; its restricted contexts are the "
             "defect triaged under our chi2 entry.")),
     # ------------------------------------------------------------------ bumpmap
+    Finding(
+        bsdf="bumpmap", check=r"^chi2 θ=84", configs=r"flip_invalid_normals=false",
+        verdict="check-limitation",
+        summary=(
+            "χ² at θi = 84.26° has nothing to test: 'no sample succeeded (every weight is 0)'. "
+            "At the check's uv the height map tilts the shading normal so that this wi lies "
+            "behind it; flip_invalid_normals=false is the switch that leaves such a wi "
+            "unflipped, so the nested roughconductor sees a back-facing wi and the BSDF is 0 "
+            "there. Sampler and pdf agree on that: at this wi the quadrature of eval() and of "
+            "pdf() over the sphere are both 0, and 0 of 100 000 samples succeed, while with "
+            "flip_invalid_normals=true (the other bumpmap configuration) 0.98 of the samples "
+            "succeed and ∫ pdf = 0.983. At 0° and 45° the configuration passes χ²; its "
+            "success fractions there equal ∫ pdf (0.710 vs 0.710, 0.242 vs 0.244). The check "
+            "rightly refuses to pass vacuously; there is no density to compare.")),
     Finding(
         bsdf="bumpmap", check=r"^(consistency|chi2|stability)", configs="",
         verdict="check-limitation",
