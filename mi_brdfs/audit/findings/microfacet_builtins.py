@@ -74,7 +74,7 @@ FINDINGS = [
             "(b) 5e-8, (c) 1.01e-3), not part of the defect. Issue text: "
             "validation/audit/upstream/roughdielectric_widened_weight.md."),
         reproducer="validation/audit/repro_roughdielectric_widened_weight.py",
-        source=_RD_SRC),
+        source=_RD_SRC, issue="validation/audit/upstream/roughdielectric_widened_weight.md"),
     Finding(
         bsdf="roughdielectric", check=r"^(energy|albedo)$", configs=r"sample_visible=false",
         verdict="defect",
@@ -94,7 +94,7 @@ FINDINGS = [
             "silhouette ring of a rough glass sphere (incidence 72-82°) is +1.3 % and +1.9 %. "
             "The centre is unchanged."),
         reproducer="validation/audit/repro_roughdielectric_widened_weight.py",
-        source=_RD_SRC),
+        source=_RD_SRC, issue="validation/audit/upstream/roughdielectric_widened_weight.md"),
     Finding(
         bsdf="roughdielectric", check=r"^consistency$",
         configs=r"^(beckmann|ggx) (α=0\.05|α=0\.3|αu=0\.05 αv=0\.3)$",

@@ -12,9 +12,9 @@ horizon and (b) NaN at ``cos θi = 0``. Reproducer:
 
 ``plastic``: its only failures are Mitsuba's χ² harness on the default and nonlinear
 configurations. They come from the Dirac lobe and are triaged elsewhere, so there is no entry
-here. The harness's "PDF sum" equals the probability that the smooth lobe is selected (0.925546,
-0.906977 and 0.273700 at θi = 0°, 45° and 84.26°; the Fresnel-based selection gives 0.925534,
-0.906964 and 0.273696). Our χ² passes on the smooth lobe.
+here. The harness's "PDF sum" equals the probability that the smooth lobe is selected (the
+Fresnel-based selection probability, to the harness's precision). Our χ² passes on the smooth
+lobe.
 """
 
 from ..triage import Finding
@@ -25,6 +25,7 @@ _SOURCE = ("src/bsdfs/roughplastic.cpp (v3.9.1): RoughPlastic::pdf lines 381-423
            "roughconductor.cpp lines 426 and 517 and plastic.cpp line 322, which return "
            "dr::select(active, pdf, 0.f)")
 _REPRO = "validation/audit/repro_roughplastic_pdf_mask.py"
+_ISSUE = "validation/audit/upstream/roughplastic_pdf_mask.md"
 
 FINDINGS = [
     Finding(
@@ -68,7 +69,7 @@ FINDINGS = [
             "default res=101/ires=4 still rejects the α=0.1 lobe at 84.26° (PDF sum 1.054, "
             "under-resolved). At res 301/ires 32, which our check chooses, it passes, p "
             "0.65-0.96."),
-        reproducer=_REPRO, source=_SOURCE),
+        reproducer=_REPRO, source=_SOURCE, issue=_ISSUE),
     Finding(
         bsdf="roughplastic", check=r"^(positivity|stability)$", configs="", verdict="defect",
         summary=(
@@ -89,5 +90,5 @@ FINDINGS = [
             "sample() masks its weight, so failed samples at cosθi<=0 carry bs.pdf=NaN, which "
             "the contract allows. The same fix removes the NaN. The reproducer's part [C] "
             "exits 1 on it."),
-        reproducer=_REPRO, source=_SOURCE),
+        reproducer=_REPRO, source=_SOURCE, issue=_ISSUE),
 ]
