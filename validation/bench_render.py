@@ -9,8 +9,10 @@ per-repeat ratios. Run it on a quiet machine; it asserts nothing.
 
     python validation/bench_render.py            # the full sizes
     python validation/bench_render.py --quick    # a smoke run (the test suite runs this)
+    python validation/bench_render.py --jit-only --pair Smith   # llvm_ad_rgb, the Smith pairs
 
-Targets: llvm_ad_rgb ≤ 1.03×; scalar_rgb through the package's render path ≤ 12×.
+Targets: llvm_ad_rgb ≤ 1.03×; scalar_rgb through the package's render path is reported without a
+target (scalar variants are for debugging).
 """
 
 from __future__ import annotations
@@ -34,14 +36,21 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="tiny sizes, few repeats")
     parser.add_argument("--json", metavar="FILE", help="also write the table rows as JSON")
+    parser.add_argument("--jit-only", action="store_true",
+                        help="only the llvm_ad_rgb pairs (the scalar render path takes long)")
+    parser.add_argument("--pair", action="append", default=[], metavar="TEXT",
+                        help="only the pairs whose label contains TEXT (repeatable)")
     args = parser.parse_args(argv)
+    pairs = [p for p in backends.PAIRS
+             if not args.pair or any(t in p.label for t in args.pair)]
     variant = mi_brdfs.use_variant(None)
     ctx = Context(out=Path("."), quick=args.quick, variant=variant)
     section = Section("render-time ratios")
     rows = []
     if variant.startswith("llvm"):
-        rows += backends.jit_ratios(ctx, section)
-    rows += backends.scalar_ratios(ctx, section)
+        rows += backends.jit_ratios(ctx, section, pairs)
+    if not args.jit_only:
+        rows += backends.scalar_ratios(ctx, section, pairs)
     print(f"Render time, plugin vs built-in, medians of interleaved repeats "
           f"({platform.machine()}, {os.cpu_count()} cores, Mitsuba {mi.__version__}):\n")
     print(md_table(["pair", "variant", "plugin per sample", "built-in per sample", "ratio",
