@@ -56,21 +56,14 @@ class Lambert(mi.BSDF):
         self.m_flags = FLAGS
         self.m_components = [FLAGS]
 
-    def sample(self, ctx, si, sample1, sample2, active=True):
-        bs = lobes.new_sample()
-        if not ctx.is_enabled(mi.BSDFFlags.DiffuseReflection):
-            return bs, mi.Spectrum(0.0)
-        active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
-        if lobes.none(active):
-            return bs, mi.Spectrum(0.0)
-        # ωo from the cosine-weighted hemisphere, pdf cosθo/π
-        wo, pdf = lobes.cosine_sample(bs, sample2)
-        # weight = f·cosθo / pdf = (ρ/π·cosθo) / (cosθo/π) = ρ
-        weight = self.m_reflectance.eval(si, active)
-        return bs, dr.select(active & (pdf > 0), lobes.depolarize(weight), 0.0)
-
+    # ωo from the cosine-weighted hemisphere, pdf cosθo/π
+    sample = lobes.diffuse_sample
     eval, pdf = lobes.diffuse_eval, lobes.diffuse_pdf
     eval_pdf = lobes.diffuse_eval_pdf
+
+    def _sample_weight(self, si, wo, active):
+        """f·cosθo / pdf = (ρ/π·cosθo) / (cosθo/π) = ρ."""
+        return self.m_reflectance.eval(si, active)
 
     def _eval_pdf(self, si, wo, active):
         """(f·cosθo, pdf) at ``wo``, for eval, pdf and eval_pdf."""

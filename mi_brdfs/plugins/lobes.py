@@ -109,6 +109,23 @@ def cosine_sample(bs, sample2):
     return wo, pdf
 
 
+def diffuse_sample(self, ctx, si, sample1, sample2, active=True):
+    """
+    ``sample`` of a one-lobe diffuse model: ωo from the cosine-weighted hemisphere, and the
+    weight f·cosθo / pdf that the class's ``_sample_weight(si, wo, active)`` gives (ρ for
+    Lambert, where the cosines and π cancel).
+    """
+    bs = new_sample()
+    if not ctx.is_enabled(mi.BSDFFlags.DiffuseReflection):
+        return bs, mi.Spectrum(0.0)
+    active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
+    if none(active):
+        return bs, mi.Spectrum(0.0)
+    wo, pdf = cosine_sample(bs, sample2)
+    weight = self._sample_weight(si, wo, active)
+    return bs, dr.select(active & (pdf > 0), depolarize(weight), 0.0)
+
+
 def diffuse_eval(self, ctx, si, wo, active=True):
     """``eval`` of a one-lobe diffuse model: 0 where the context disables the lobe, else the
     class's ``_eval_pdf(si, wo, active)``."""
