@@ -25,7 +25,7 @@ FORMS = {
 ENTRY = {
     "load_bsdf": lambda s: float(np.ravel(bsdfspec.load_bsdf(s).eval_diffuse_reflectance(
         mi.SurfaceInteraction3f()))[0]),
-    "check_furnace": lambda s: checks.check_furnace(s, spp=2, res=8, tol=1.0).value,
+    "check_furnace": lambda s: checks.check_furnace(s, spp=2, res=8, tol=1.0, n=256).value,
     "furnace_render": lambda s: checks.furnace_render(s, spp=2, res=8, predict=False).mean,
     "check_consistency": lambda s: float(checks.check_consistency(s, n=64).passed),
     "check_energy": lambda s: float(checks.check_energy(s, thetas_deg=(0.0, 60.0), n=512).passed),

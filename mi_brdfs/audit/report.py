@@ -71,8 +71,12 @@ def _cell(verdicts: list[tuple]) -> str:
 
 
 def write(records: list[dict], out: Path, command: str, seconds: float, variant: str,
-          quick: bool, table=None) -> tuple[Path, Path, Counter]:
-    """Write the report and the findings; returns their paths and the count of verdicts."""
+          quick: bool, table=None, exits: dict | None = None) -> tuple[Path, Path, Counter]:
+    """
+    Write the report and the findings; returns their paths and the count of verdicts.
+    ``exits``: the exit status of each reproducer in this run (:mod:`.reproducers`), None
+    where they were not run.
+    """
     table = triage.findings() if table is None else table
     out.mkdir(parents=True, exist_ok=True)
     (out / "audit").mkdir(exist_ok=True)
@@ -83,7 +87,7 @@ def write(records: list[dict], out: Path, command: str, seconds: float, variant:
 
     lines = _introduction(command, seconds, variant, quick, counts)
     lines += _verdict_table(records, table)
-    lines += _finding_sections(records, items, table)
+    lines += _finding_sections(records, items, table, exits)
     lines += _coverage(records)
     lines += _limitations()
     lines += _untriaged(records, table)
@@ -206,7 +210,8 @@ def _verdict_table(records: list[dict], table) -> list[str]:
     return lines
 
 
-def _finding_sections(records: list[dict], items: list[dict], table) -> list[str]:
+def _finding_sections(records: list[dict], items: list[dict], table,
+                      exits: dict | None = None) -> list[str]:
     """A section per verdict (defects, model properties, check limitations, statistical): each
     finding that some record has, with its summary, reproducer, source and records."""
     by_finding: dict = defaultdict(list)
@@ -227,7 +232,7 @@ def _finding_sections(records: list[dict], items: list[dict], table) -> list[str
                       "", f.summary, ""]
             if f.reproducer:
                 lines.append(f"- Reproducer: [`{f.reproducer}`](../{f.reproducer}) "
-                             f"(exits 1 while the defect is present)")
+                             f"(exits 1 while the defect is present)" + _rerun(f, exits))
             if f.source:
                 lines.append(f"- Source: {f.source}")
             if f.issue:
@@ -238,6 +243,15 @@ def _finding_sections(records: list[dict], items: list[dict], table) -> list[str
             lines.append("- Records: " + "; ".join(sorted(set(by_finding[f]))[:12]))
             lines.append("")
     return lines
+
+
+def _rerun(finding, exits: dict | None) -> str:
+    """What this run's rerun of a finding's reproducer said, where the audit reran them."""
+    from .reproducers import describe
+
+    if exits is None or finding.reproducer not in exits:
+        return "; not rerun in this run (`make audit` reruns them)"
+    return "; " + describe(exits[finding.reproducer])
 
 
 def _limitations() -> list[str]:

@@ -89,7 +89,7 @@ def _kernel_seconds(fn) -> float:
 
 def jit_seconds(spec, ctx: Context, sample: bool = False) -> float:
     """Kernel seconds per 1e7 evaluations of ``spec`` in the JIT variant (median of repeats)."""
-    n = ctx.n(10_000_000, 1_000_000)
+    n = ctx.n(10_000_000, 100_000)
     times = interleaved({"a": _eval_call(load_bsdf(spec), n, sample=sample)},
                         repeats=ctx.n(5, 2), timer=_kernel_seconds)
     return median(times["a"]) * 1e7 / n
@@ -97,7 +97,7 @@ def jit_seconds(spec, ctx: Context, sample: bool = False) -> float:
 
 def jit_cost(a, b, ctx: Context, sample: bool = False):
     """(kernel seconds per 1e7 evaluations of A, of B, median ratio) in the JIT variant."""
-    n = ctx.n(10_000_000, 1_000_000)
+    n = ctx.n(10_000_000, 100_000)
     funcs = {"a": _eval_call(load_bsdf(a), n, sample=sample),
              "b": _eval_call(load_bsdf(b), n, sample=sample)}
     times = interleaved(funcs, repeats=ctx.n(9, 3), timer=_kernel_seconds)
@@ -108,7 +108,7 @@ def jit_cost(a, b, ctx: Context, sample: bool = False):
 def scalar_cost(a, b, ctx: Context):
     """(µs per eval_pdf call of A, of B, ratio) in the scalar variant (per ray in a render)."""
     with ctx.scalar():
-        n = ctx.n(20_000, 2_000)
+        n = ctx.n(20_000, 200)
         calls = {}
         for key, spec in (("a", a), ("b", b)):
             bsdf = load_bsdf(spec)

@@ -254,6 +254,7 @@ def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) 
     for readme in readmes:
         if not Path(readme).is_file():
             raise MiBrdfsError(f"--readme {readme}: no such file")
+    sections = _only_sections(args, sections, kwargs)
     out = _report_folder(args, kwargs.get("filename", "REPORT.md"))
     variant = _jit_variant(f"the {kwargs.get('title', 'report')}")
     report, done, values = run(sections, Context(out=out, quick=args.quick, variant=variant),
@@ -271,6 +272,33 @@ def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) 
         count = fill_quotes(readme, values, quotes)
         print(f"updated {readme}: {count} figures quoted from {report.name}")
     return failed
+
+
+def section_name(section) -> str:
+    """A report section's name for ``--only``: the module that defines it (``campaign/ward.py``:
+    ``ward``)."""
+    return section.__module__.rsplit(".", 1)[-1]
+
+
+def _only_sections(args, sections, kwargs) -> list:
+    """The sections ``--only`` names (all without it), in the report's order; the command line
+    in ``kwargs`` says which. An unknown name, or ``--only`` with ``--readme`` (a partial run
+    cannot fill every quoted figure), is one error."""
+    from ..errors import MiBrdfsError
+
+    if not getattr(args, "only", None):
+        return sections
+    names = [n.strip() for n in args.only.split(",") if n.strip()]
+    known = [section_name(s) for s in sections]
+    unknown = [n for n in names if n not in known]
+    if unknown or not names:
+        raise MiBrdfsError(f"--only {args.only}: no section {', '.join(unknown) or 'named'} "
+                           f"(sections: {', '.join(known)})")
+    if getattr(args, "readme", None):
+        raise MiBrdfsError("--only with --readme: a partial run cannot fill every figure the "
+                           "documents quote; run without --only")
+    kwargs["command"] = kwargs.get("command", "mi-brdfs validate") + f" --only {args.only}"
+    return [s for s in sections if section_name(s) in names]
 
 
 def cmd_audit(args) -> int:
@@ -301,13 +329,20 @@ def cmd_audit(args) -> int:
     records = run.run(cases, args.variant, args.quick, out / "audit" / ".cache",
                       processes=args.processes or min(os.cpu_count() or 1, 4),
                       progress=not args.quiet)
+    exits = None
+    if not args.quick and not args.only:  # the whole audit reruns its evidence
+        from ..audit import reproducers
+        exits = reproducers.run_all(processes=args.processes or 2)
     command = "mi-brdfs audit" + (" --quick" if args.quick else "") + \
         (f" --only {args.only}" if args.only else "") + \
         (f" --variant {args.variant}" if args.variant != "llvm_ad_rgb" else "")
     md, js, counts = report.write(records, out, command, time.perf_counter() - t0,
-                                  args.variant, args.quick)
+                                  args.variant, args.quick, exits=exits)
     print(f"wrote {md} and {js}: " + ", ".join(f"{n} {v}" for v, n in sorted(counts.items())))
-    return 1 if counts.get("untriaged") else 0
+    broken = [p for p, code in (exits or {}).items() if code not in (0, 1)]
+    for path in broken:
+        print(f"  broken reproducer: {path} (neither 0 nor 1; see the report)")
+    return 1 if counts.get("untriaged") or broken else 0
 
 
 def cmd_validate(args) -> int:

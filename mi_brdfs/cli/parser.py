@@ -291,6 +291,9 @@ def _report_command(sub, name, summary, description, quick, target, tag):
                      help=f"report folder (default: the current directory; {target}: "
                           f"validation)")
     cmd.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    cmd.add_argument("--only", metavar="SECTION[,SECTION]",
+                     help="run only these sections (by name, e.g. the plugin's: the list is in "
+                          "the error for an unknown name); not with --readme")
     cmd.add_argument("--readme", metavar="FILE", action="append",
                      help=f"also fill in the figures FILE quotes from the run, each marked "
                           f"<!-- {tag}: KEY -->VALUE<!-- /{tag} --> (repeatable; {target}: "
@@ -327,8 +330,10 @@ def _add_audit(sub) -> None:
                     "grid of configurations through the whole battery of checks and Mitsuba's "
                     "own χ² harness, in worker processes, and write MITSUBA_AUDIT.md and "
                     "audit/findings.json with a triaged verdict for every failure. Results are "
-                    "cached per case in OUT/audit/.cache: an interrupted audit resumes. Exit "
-                    "status 1 when a failure has no verdict yet.")
+                    "cached per case in OUT/audit/.cache: an interrupted audit resumes. The whole "
+                    "audit (no --quick, no --only) also reruns every reproducer of a defect "
+                    "(validation/audit/repro_*.py) and reports whether each still fails. Exit "
+                    "status 1 when a failure has no verdict yet or a reproducer is broken.")
     au.add_argument("--quick", action="store_true",
                     help="a few configurations, 10× fewer samples (the test suite's run; writes "
                          "MITSUBA_AUDIT-quick.md)")
