@@ -42,10 +42,16 @@ def run(tmp_path_factory):
     return proc.stdout, out
 
 
-def test01_the_render_is_written_and_finite(run):
+def test01_one_run_and_what_it_writes_and_prints(run):
+    """One run of the tutorial (it takes seconds) checked three ways, below."""
+    _the_render_is_written_and_finite(*run)
+    _the_printed_numbers_parse_and_make_sense(*run)
+    _every_announced_output_exists(*run)
+
+
+def _the_render_is_written_and_finite(stdout, out):
     from mi_brdfs.imageio import read_exr
 
-    stdout, out = run
     image, _ = read_exr(out / "cooktorrance.exr")
     assert image.shape == (64, 64, 3)
     assert np.all(np.isfinite(image))
@@ -55,8 +61,7 @@ def test01_the_render_is_written_and_finite(run):
     assert (out / "cooktorrance.png").stat().st_size > 0
 
 
-def test02_the_printed_numbers_parse_and_make_sense(run):
-    stdout, _ = run
+def _the_printed_numbers_parse_and_make_sense(stdout, out):
     # the furnace: Lambert with ρ = 1 vanishes; rough Cook-Torrance without Fresnel loses energy
     assert abs(_number(r"furnace lambert: mean =", stdout) - 1.0) < 0.01
     ct = _number(r"furnace cooktorrance: mean =", stdout)
@@ -73,8 +78,7 @@ def test02_the_printed_numbers_parse_and_make_sense(run):
     assert "tutorial done" in stdout
 
 
-def test03_every_announced_output_exists(run):
-    stdout, out = run
+def _every_announced_output_exists(stdout, out):
     for name in ("cooktorrance.png", "furnace-lambert.png", "furnace-cooktorrance.png",
                  "fit-target.png", "fit-phong.png"):
         assert (out / name).is_file(), name

@@ -11,8 +11,10 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def test01_bench_render_quick(tmp_path):
+    """Two of its pairs (--pair; make bench runs them all): a scalar and an llvm row each."""
     out = tmp_path / "bench.json"
     p = subprocess.run([sys.executable, str(ROOT / "validation" / "bench_render.py"), "--quick",
+                        "--pair", "lambert vs diffuse", "--pair", "(Smith)",
                         "--json", str(out)], capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
     assert "| lambert vs diffuse | scalar_rgb (" in p.stdout

@@ -69,14 +69,26 @@ BAD = {
 
 
 @pytest.mark.parametrize("case", BAD, ids=list(BAD))
-def test03_bad_input_one_line_no_output(tmp_path, case):
+def test03_bad_input_one_line_no_output(tmp_path, case, capsys, monkeypatch):
+    """Each case through the command's entry point in this process; one of them (the first) in
+    a subprocess too, as a user runs it: the same exit code, the same one line."""
+    from mi_brdfs.cli import main
+
     args, message = BAD[case]
     bad = tmp_path / "bad.xml"
     bad.write_text('<scene version="3.0.0"><shape type="sphere">')
     args = [a.format(bad=bad, tmp=tmp_path) for a in args]
     if "-o" not in args:
         args += ["-o", str(tmp_path / "out.exr")]
-    p = run(*args)
+    if case == next(iter(BAD)):
+        p = run(*args)
+    else:
+        monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
+        try:
+            code = main(args)
+        except SystemExit as e:  # argparse's own errors exit as they do from the shell
+            code = e.code
+        p = subprocess.CompletedProcess(args, code, *capsys.readouterr())
     assert p.returncode == 2, (p.stdout, p.stderr)
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("mi-brdfs: error: "), p.stderr
