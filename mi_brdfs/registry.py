@@ -30,6 +30,8 @@ PLUGINS = {
     "cooktorrance": ("mi_brdfs.plugins.cooktorrance", "CookTorrance"),
     "ward": ("mi_brdfs.plugins.ward", "Ward"),
     "orennayar": ("mi_brdfs.plugins.orennayar", "OrenNayar"),
+    "ashikhmin": ("mi_brdfs.plugins.ashikhmin", "Ashikhmin"),
+    "lafortune": ("mi_brdfs.plugins.lafortune", "Lafortune"),
 }
 
 # variant -> {plugin id -> class}

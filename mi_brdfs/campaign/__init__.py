@@ -15,9 +15,11 @@ def sections() -> list:
     """The report's sections, in order."""
     from . import (anisotropy, claims, cooktorrance, extremes, fits, lambert, orennayar, phong,
                    transmission, ward)
+    from . import lafortune
+    from . import ashikhmin
     return [lambert.section, phong.section, cooktorrance.section, anisotropy.section,
-            transmission.section, ward.section, orennayar.section, fits.section, claims.section,
-            extremes.section]
+            transmission.section, ward.section, orennayar.section, lafortune.section,
+            ashikhmin.section, fits.section, claims.section, extremes.section]
 
 
 __all__ = ["Context", "Section", "run", "sections"]

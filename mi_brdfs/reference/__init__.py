@@ -18,7 +18,9 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
+from .ashikhmin import Ashikhmin
 from .cooktorrance import CookTorrance, RoughDielectric
+from .lafortune import Lafortune
 from .lambert import Lambert
 from .orennayar import OrenNayar
 from .phong import Phong
@@ -26,7 +28,7 @@ from .quadrature import hemisphere_albedo
 from .ward import Ward
 
 __all__ = ["for_spec", "color", "Lambert", "Phong", "CookTorrance", "RoughDielectric", "Ward",
-           "OrenNayar", "hemisphere_albedo"]
+           "OrenNayar", "Ashikhmin", "hemisphere_albedo"]
 
 
 def color(value, default=None) -> np.ndarray | None:
@@ -84,6 +86,10 @@ def for_spec(spec):
         if rho is None or not isinstance(sigma, (int, float)):
             return None
         return OrenNayar(rho, sigma, spec.get("form", "qualitative"))
+    if kind == "lafortune":
+        return Lafortune.from_spec(spec, color)
+    if kind == "ashikhmin":
+        return Ashikhmin.from_spec(spec, color)
     if kind == "roughdielectric" or (kind == "cooktorrance" and spec.get("transmission")):
         return _rough_dielectric(spec)
     if kind in ("cooktorrance", "roughconductor"):

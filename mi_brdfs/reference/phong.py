@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from .quadrature import gauss_legendre
+from .quadrature import cosine_power_integral
 
 FORMS = ("normalized", "lecture", "original")
 LOBES = ("mirror", "halfway")
@@ -120,24 +120,11 @@ class Phong:
         """E(θ) of the specular part with ks = 1."""
         if math.cos(theta) <= 0:
             return 0.0
-        n1 = self.n + 1.0
         # u = cos^(n+1)(angle): the kinks in u, ascending (large angles give small u)
-        cuts = sorted({min(max(math.cos(a), 0.0) ** n1, 1.0) for a in self._kinks(theta)
-                       if 0 < a < math.pi / 2})
-        x, w = gauss_legendre(NODES)
-        x, w = 0.5 * (x + 1), 0.5 * w
-        # u = lo + (hi − lo)·x²(3 − 2x): du/dx vanishes at both ends, which smooths the kinks
-        # and the u^(1/(n+1)) behaviour at u = 0 for Gauss-Legendre
-        s, ds = x * x * (3 - 2 * x), 6 * x * (1 - x)
-        total = 0.0
-        for lo, hi in zip([0.0] + cuts, cuts + [1.0]):
-            if hi <= lo:
-                continue
-            u = lo + (hi - lo) * s
-            t = np.log(u) / n1  # cos = e^t, sin² = −expm1(2t): exact also for n = 1e12
-            cos_a, sin_a = np.exp(t), np.sqrt(-np.expm1(2 * t))
-            total += (hi - lo) * np.dot(w * ds, self._ring_integral(cos_a, sin_a, theta))
-        return self.normalization * total / n1
+        cuts = sorted({min(max(math.cos(a), 0.0) ** (self.n + 1.0), 1.0)
+                       for a in self._kinks(theta) if 0 < a < math.pi / 2})
+        return self.normalization * cosine_power_integral(
+            self.n, cuts, lambda cos_a, sin_a: self._ring_integral(cos_a, sin_a, theta), NODES)
 
     def albedo(self, theta: float) -> np.ndarray:
         """E(θ) per channel: ρd + ks·(specular albedo) above the surface, 0 below."""

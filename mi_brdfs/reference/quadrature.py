@@ -60,3 +60,27 @@ def hemisphere_albedo(brdf, theta: float, n_mu: int = 512, n_phi: int = 512,
     wi = np.broadcast_to(direction(theta), wo.shape)
     f = np.asarray(brdf(wi, wo), dtype=np.float64).reshape(len(wo), -1)
     return np.einsum("n,nc->c", weights * wo[:, 2], f)
+
+
+def cosine_power_integral(n: float, cuts, ring, nodes: int = 400) -> float:
+    """
+    ∫ cosⁿβ g(ω) dω over the directions with cos β > 0, β the angle to some axis and φ the
+    angle about it: with u = cos^(n+1)β, cosⁿβ dω = du dφ/(n+1), so the integral is
+    1/(n+1) ∫₀¹ (∫ g dφ) du at any n. Gauss-Legendre in u, split at ``cuts`` (the values of u
+    in (0, 1) where the ring integral has a kink, e.g. where rings start crossing the
+    horizon), with u = lo + (hi − lo)·x²(3 − 2x) on each piece: du/dx vanishes at both ends,
+    which smooths the kinks and the u^(1/(n+1)) behaviour at u = 0.
+
+    Parameter ``ring`` (callable): ``ring(cos β, sin β)`` (arrays) → ∫ g dφ over each ring.
+    """
+    x, w = gauss_legendre(nodes)
+    x, w = 0.5 * (x + 1), 0.5 * w
+    s, ds = x * x * (3 - 2 * x), 6 * x * (1 - x)
+    n1 = n + 1.0
+    total = 0.0
+    for lo, hi in zip([0.0] + list(cuts), list(cuts) + [1.0]):
+        if hi <= lo:
+            continue
+        t = np.log(lo + (hi - lo) * s) / n1  # cos β = e^t, sin²β = −expm1(2t): exact for n = 1e12
+        total += (hi - lo) * np.dot(w * ds, ring(np.exp(t), np.sqrt(-np.expm1(2 * t))))
+    return total / n1
