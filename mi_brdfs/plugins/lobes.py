@@ -149,7 +149,7 @@ def diffuse_eval_pdf(self, ctx, si, wo, active=True):
 
 
 # -------------------------------------------------------------------------------------------------
-# A diffuse and a glossy lobe (phong, ward)
+# A diffuse and a glossy lobe (phong, ward, ashikhmin)
 # -------------------------------------------------------------------------------------------------
 
 def set_two_lobes(self, diffuse, specular, glossy_flags: int) -> None:
@@ -158,12 +158,17 @@ def set_two_lobes(self, diffuse, specular, glossy_flags: int) -> None:
     whose reflectance is not the constant 0 (a lobe that is 0 is left out entirely); their
     indices in ``self._diffuse``, ``self._glossy`` (None: absent).
     """
+    set_lobes(self, not is_zero(diffuse), not is_zero(specular), glossy_flags)
+
+
+def set_lobes(self, has_diffuse: bool, has_glossy: bool, glossy_flags: int) -> None:
+    """:func:`set_two_lobes` for a model that decides itself which of its lobes exist."""
     self._diffuse = self._glossy = None
     components = []
-    if not is_zero(diffuse):
+    if has_diffuse:
         self._diffuse = len(components)
         components.append(flag("DiffuseReflection", "FrontSide"))
-    if not is_zero(specular):
+    if has_glossy:
         self._glossy = len(components)
         components.append(glossy_flags)
     self.m_components = components  # a copy crosses to C++: assign, don't append
@@ -203,3 +208,36 @@ def glossy_or_diffuse(self, bs, sample1, sample2, p_glossy, lobes, glossy):
                                      mi.UInt32(self._diffuse or 0))
     bs.eta = 1.0
     return bs
+
+
+def two_lobes_sample(self, ctx, si, sample1, sample2, active=True):
+    """
+    ``sample`` of a model of :func:`set_two_lobes` whose class gives
+    ``_glossy_params(si, active)`` (what its glossy lobe needs at ``si``, computed once),
+    ``_sample_glossy(si, sample2, params)`` → ωo, ``_glossy_probability(si)`` and
+    ``_eval_pdf(ctx, si, wo, active, enabled, params)`` → (f·cosθo, mixture pdf of ``sample``):
+    ωo from the glossy lobe where ``sample1`` < the probability (both lobes enabled), else
+    from the cosine-weighted hemisphere; bs.pdf is the mixture density at ωo and the weight
+    f·cosθo / pdf, 0 below the horizon.
+    """
+    bs, sample2 = new_sample(), point2(sample2)
+    enabled = self._enabled(ctx)
+    if not (enabled[0] or enabled[1]):
+        return bs, mi.Spectrum(0.0)
+    active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
+    if none(active):
+        return bs, mi.Spectrum(0.0)
+    params = self._glossy_params(si, active) if enabled[1] else None
+    glossy_or_diffuse(self, bs, sample1, sample2, self._glossy_probability(si), enabled,
+                      lambda: self._sample_glossy(si, sample2, params))
+    value, bs.pdf = self._eval_pdf(ctx, si, bs.wo, active, enabled, params)
+    return bs, weight(value, bs.pdf, active)
+
+
+def two_lobes_eval_pdf(self, ctx, si, wo, active=True):
+    """``eval_pdf`` of a model of :func:`two_lobes_sample`: its ``_eval_pdf`` for the lobes
+    the context enables."""
+    enabled = self._enabled(ctx)
+    if not (enabled[0] or enabled[1]):
+        return mi.Spectrum(0.0), mi.Float(0.0)
+    return self._eval_pdf(ctx, si, vector(wo), active, enabled)

@@ -222,31 +222,43 @@ def reflectance(props, plugin: str, name: str, default: float):
 def roughness(props, plugin: str, default: float = 0.1):
     """
     (α_u, α_v) textures from ``alpha`` (the same texture twice) or from ``alpha_u`` and
-    ``alpha_v``, as Mitsuba's ``roughconductor`` reads them: finite and ≥ 0, both or neither
-    of the pair, not together with ``alpha``; warns where a value is below the clamp
-    :data:`mi_brdfs.scattering.microfacet.ALPHA_MIN` of the microfacet terms.
+    ``alpha_v``, as Mitsuba's ``roughconductor`` reads them (:func:`isotropic_or_pair`);
+    warns where a value is below the clamp :data:`mi_brdfs.scattering.microfacet.ALPHA_MIN`
+    of the microfacet terms.
     """
-    given = [name for name in ("alpha_u", "alpha_v") if name in props]
-    if given:
-        if "alpha" in props:
-            raise ParameterError(plugin, given[0], props[given[0]],
-                                 "must not be given together with alpha (give alpha for an "
-                                 "isotropic surface, alpha_u and alpha_v for an anisotropic one)")
-        if len(given) == 1:
-            other = "alpha_v" if given[0] == "alpha_u" else "alpha_u"
-            raise ParameterError(plugin, given[0], props[given[0]],
-                                 f"needs {other} as well (an anisotropic surface has both)")
-        names = given
-    else:
-        names = ["alpha"]
-    alphas = [texture(props, plugin, name, default, lo=0.0, hi=math.inf, scalar=True)
-              for name in names]
+    names, alphas = isotropic_or_pair(props, plugin, "alpha", ("alpha_u", "alpha_v"), default)
     for name, tex in zip(names, alphas):
         low = texture_range(tex)
         if low is not None and low[0] < float(np.float32(ALPHA_MIN)):  # 1e-4 held in float32
             warn(plugin, f"{name} = {low[0]:g} is clamped to {ALPHA_MIN:g}, as in Mitsuba's "
                          f"microfacet models")
     return alphas[0], alphas[-1]
+
+
+def isotropic_or_pair(props, plugin: str, single: str, pair: tuple[str, str], default: float,
+                      hi: float = math.inf):
+    """
+    A parameter with one value per point for an isotropic surface (``single``) or one along
+    the tangent and one along the bitangent (the two names of ``pair``): both or neither of
+    the pair, not together with ``single``; each a float or a texture, finite and within
+    [0, ``hi``]. Returns → (the names given, their textures): one name or two.
+    """
+    given = [name for name in pair if name in props]
+    if given:
+        if single in props:
+            raise ParameterError(plugin, given[0], props[given[0]],
+                                 f"must not be given together with {single} (give {single} for "
+                                 f"an isotropic surface, {pair[0]} and {pair[1]} for an "
+                                 f"anisotropic one)")
+        if len(given) == 1:
+            other = pair[1] if given[0] == pair[0] else pair[0]
+            raise ParameterError(plugin, given[0], props[given[0]],
+                                 f"needs {other} as well (an anisotropic surface has both)")
+        names = given
+    else:
+        names = [single]
+    return names, [texture(props, plugin, name, default, lo=0.0, hi=hi, scalar=True)
+                   for name in names]
 
 
 def number_or_texture(props, plugin: str, name: str, default: float, lo: float, hi: float,

@@ -59,9 +59,13 @@ def r0(eta, k):
 
 def schlick(cos_theta_i, eta, k):
     """Schlick's approximation R0 + (1 − R0)(1 − cosθi)⁵, with R0 from η and k."""
+    return schlick_r0(cos_theta_i, r0(eta, k))
+
+
+def schlick_r0(cos_theta_i, f0):
+    """Schlick's approximation R0 + (1 − R0)(1 − cosθi)⁵ for a given R0 = ``f0``."""
     x = 1.0 - dr.minimum(dr.maximum(cos_theta_i, 0.0), 1.0)
     x2 = x * x
-    f0 = r0(eta, k)
     return f0 + (1.0 - f0) * (x2 * x2 * x)
 
 

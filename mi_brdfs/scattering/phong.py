@@ -109,14 +109,21 @@ def halfway_lobe(wi, wo, n, pdf_norm):
 # -------------------------------------------------------------------------------------------------
 
 
+def cos_power_theta(u, inv_n1):
+    """
+    (cos θ, sin θ) with density (n+1)·cosⁿθ in cos θ, from ``u`` ∈ [0, 1] and 1/(n+1):
+    cos θ = u^(1/(n+1)), with sin θ from expm1 (no collapse onto the axis for large n).
+    """
+    t = dr.log(u) * inv_n1  # ≤ 0; u = 0 gives −∞: cos θ = 0, sin θ = 1
+    return dr.exp(t), dr.sqrt(-expm1(2.0 * t))
+
+
 def sample_cos_power(u, inv_n1):
     """
     A direction about +z with density (n+1)/(2π)·cosⁿθ, from ``u`` ∈ [0, 1)² and 1/(n+1):
-    cos θ = u.x^(1/(n+1)) and φ = 2π u.y, with sin θ from expm1 (no collapse onto the axis).
+    cos θ = u.x^(1/(n+1)) (:func:`cos_power_theta`) and φ = 2π u.y.
     """
-    t = dr.log(u.x) * inv_n1  # ≤ 0; u.x = 0 gives −∞: cos θ = 0, sin θ = 1
-    cos_theta = dr.exp(t)
-    sin_theta = dr.sqrt(-expm1(2.0 * t))
+    cos_theta, sin_theta = cos_power_theta(u.x, inv_n1)
     sin_phi, cos_phi = dr.sincos(dr.two_pi * u.y)
     return mi.Vector3f(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta)
 

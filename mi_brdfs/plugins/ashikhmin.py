@@ -1,0 +1,214 @@
+"""
+Ashikhmin & Shirley's anisotropic Phong reflectance model (2000): a Phong-like glossy lobe of
+the half vector with Schlick's Fresnel factor, over a non-Lambertian diffuse term that keeps
+the sum energy-conserving, importance-sampled with the paper's half-vector sampler. The terms
+live in :mod:`mi_brdfs.scattering.ashikhmin`.
+"""
+
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from ..scattering import ashikhmin as terms
+from ..scattering import mixture, vector
+from . import lobes, properties
+
+PLUGIN = "ashikhmin"
+
+GLOSSY_FLAGS = lobes.flag("GlossyReflection", "FrontSide")
+ANISOTROPIC = lobes.flag("Anisotropic")
+DIFFERENTIABLE = mi.ParamFlags.Differentiable
+DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
+
+
+def _constant(tex) -> float | None:
+    """The value of a texture known to be one constant everywhere, else None."""
+    rng = properties.texture_range(tex)
+    if rng is None or tex.is_spatially_varying() or rng[0] != rng[1]:
+        return None
+    return rng[0]
+
+
+class Ashikhmin(mi.BSDF):
+    r"""
+    .. _bsdf-ashikhmin:
+
+    Ashikhmin-Shirley anisotropic Phong reflectance (:monosp:`ashikhmin`)
+    ---------------------------------------------------------------------
+
+    .. pluginparameters::
+
+     * - exponent, nu, nv
+       - |float| or |texture|
+       - Phong-like exponents of the glossy lobe: ``exponent`` for an isotropic surface, or
+         ``nu`` along the tangent and ``nv`` along the bitangent (the highlight is narrow
+         along a direction whose exponent is large), finite and within [0, 10³⁰]; 0 is a
+         uniform distribution of half vectors (Default: 100)
+       - |exposed|, |differentiable|, |discontinuous|
+
+     * - specular_reflectance
+       - |spectrum| or |texture|
+       - Rs, the specular reflectance at normal incidence (Schlick's R0), finite and within
+         [0, 1] (Default: 0.04, a dielectric of index 1.5 such as plastic)
+       - |exposed|, |differentiable|
+
+     * - diffuse_reflectance
+       - |spectrum| or |texture|
+       - Rd, the substrate's albedo, finite and within [0, 1] (Default: 0.5)
+       - |exposed|, |differentiable|
+
+    With k1 = ωi, k2 = ωo, h their half vector at azimuth φh and k·h = ωi·h
+    (Ashikhmin & Shirley 2000, the specular and the diffuse term):
+
+    .. math::
+
+        f = \frac{\sqrt{(n_u+1)(n_v+1)}}{8\pi}
+            \frac{(n\cdot h)^{n_u\cos^2\phi_h + n_v\sin^2\phi_h}}
+                 {(k\cdot h)\max(\cos\theta_i, \cos\theta_o)}\,F(k\cdot h)
+          + \frac{28 R_d}{23\pi}(1 - R_s)
+            \Big(1 - \big(1 - \tfrac{\cos\theta_i}{2}\big)^5\Big)
+            \Big(1 - \big(1 - \tfrac{\cos\theta_o}{2}\big)^5\Big)
+
+    with F(k·h) = Rs + (1 − Rs)(1 − k·h)⁵. ``eval`` returns f·cosθo; the model is one-sided
+    (0 when either direction is below the surface) and reciprocal. It conserves energy, as
+    the paper claims, for every Rs, Rd in [0, 1] and at every incidence, grazing included:
+    the specular albedo is at most Rs + (1 − Rs)(1 − cosθi/2)⁵ and the diffuse albedo is
+    exactly Rd (1 − Rs)(1 − (1 − cosθi/2)⁵) (:mod:`mi_brdfs.scattering.ashikhmin`), so
+    Rd + Rs ≤ 1 is not needed; the largest albedo measured, with Rs = 1 and a sharp lobe at
+    normal incidence, is just below 1 (``validation/REPORT.md``). The glossy lobe is never
+    0 (F reaches 1 at grazing even where Rs = 0); the diffuse one is left out where Rd is
+    the constant 0 or Rs the constant 1. The component of the glossy lobe is
+    ``Anisotropic`` where ``nu`` and ``nv`` are given and are not the same constant.
+
+    **Sampling.** The glossy lobe draws the half vector with the paper's density
+    √((nu+1)(nv+1))/(2π) (n·h)^(nu cos²φh + nv sin²φh), by its formulas for φh and cosθh,
+    and reflects ωi about it (density per ωo: that over 4 k·h), the diffuse lobe draws the
+    cosine-weighted hemisphere. ``sample()`` picks the glossy lobe with probability
+    ws/(ws + wd), ws = Rs + (1 − Rs)(1 − cosθi/2)⁵ and wd = Rd (1 − Rs)(1 − (1 −
+    cosθi/2)⁵) with the textures' mean values: the bounds of the lobes' albedos at this
+    incidence, so that towards grazing incidence, where the diffuse term vanishes, the
+    glossy lobe takes every sample. ``pdf()`` and ``bs.pdf`` are the mixture density;
+    samples below the horizon have weight 0.
+
+    **Float32.** The exponent is taken from the half vector's components
+    ((nu hx² + nv hy²)/(hx² + hy²), as the paper writes it without trigonometry, finite at
+    h = n) and the lobe as
+    exp(e·log1p(−(1 − cosθh))), so that exponents from 0 to 10⁶ and beyond give no NaN or
+    Inf at any direction, grazing ones included.
+
+    .. tabs::
+        .. code-tab:: xml
+
+            <bsdf type="ashikhmin">
+                <float name="nu" value="10"/>
+                <float name="nv" value="1000"/>
+                <rgb name="diffuse_reflectance" value="0.3, 0.1, 0.1"/>
+                <float name="specular_reflectance" value="0.05"/>
+            </bsdf>
+
+        .. code-tab:: python
+
+            {'type': 'ashikhmin', 'nu': 10.0, 'nv': 1000.0,
+             'diffuse_reflectance': {'type': 'rgb', 'value': [0.3, 0.1, 0.1]},
+             'specular_reflectance': 0.05}
+    """
+
+    def __init__(self, props):
+        super().__init__(props)
+        #: Exponents along the tangent and the bitangent: one texture twice when isotropic.
+        names, exponents = properties.isotropic_or_pair(props, PLUGIN, "exponent", ("nu", "nv"),
+                                                        100.0, hi=terms.EXPONENT_MAX)
+        self.m_nu, self.m_nv = exponents[0], exponents[-1]
+        self._separate = len(names) == 2
+        anisotropic = self._separate and (_constant(self.m_nu) is None
+                                          or _constant(self.m_nu) != _constant(self.m_nv))
+        self.m_specular_reflectance = properties.reflectance(props, PLUGIN,
+                                                             "specular_reflectance", 0.04)
+        self.m_diffuse_reflectance = properties.reflectance(props, PLUGIN,
+                                                            "diffuse_reflectance", 0.5)
+        # Lobes in component order: the diffuse one, Rd (1 − Rs)·…, is 0 where Rd ≡ 0 or Rs ≡ 1
+        has_diffuse = not (properties.is_zero(self.m_diffuse_reflectance)
+                           or _constant(self.m_specular_reflectance) == 1.0)
+        lobes.set_lobes(self, has_diffuse, True,
+                        GLOSSY_FLAGS | (ANISOTROPIC if anisotropic else 0))
+        self.parameters_changed()
+
+    eval, pdf = lobes.eval_half, lobes.pdf_half
+    sample, eval_pdf = lobes.two_lobes_sample, lobes.two_lobes_eval_pdf
+    _enabled = lobes.two_lobes_enabled
+
+    def _eval_pdf(self, ctx, si, wo, active, enabled, params=None):
+        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the ``enabled`` lobes
+        (diffuse, glossy)."""
+        has_diffuse, has_glossy = enabled
+        wi = si.wi
+        active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
+        rs = self.m_specular_reflectance.eval(si, active)
+        if has_diffuse:
+            # ρd·cosθo, sampled by the cosine-weighted hemisphere
+            pdf = dr.inv_pi * wo.z
+            value = self.m_diffuse_reflectance.eval(si, active) * (1.0 - rs) * (
+                terms.diffuse(wi.z, wo.z) * wo.z)
+        if has_glossy:
+            # ρs·cosθo, from the density of ωi reflected about the sampled half vector
+            nu, nv = params or self._glossy_params(si, active)
+            pdf_s, k_dot_h = terms.lobe(wi, wo, nu, nv)
+            value_s = terms.specular(pdf_s, terms.fresnel(k_dot_h, rs), wi.z, wo.z)
+            if has_diffuse:  # both lobes: their sum, and the mixture of both strategies
+                value = value + value_s
+                pdf = mixture.pdf(self._glossy_probability(si), pdf_s, pdf)
+            else:
+                value, pdf = value_s, pdf_s
+        return lobes.finish(value, pdf, active)
+
+    def _glossy_params(self, si, active):
+        """(nu, nv) at ``si``; values set through ``mi.traverse`` are clamped into range."""
+        nu = dr.clip(self.m_nu.eval_1(si, active), 0.0, terms.EXPONENT_MAX)
+        if self.m_nv is self.m_nu:
+            return nu, nu
+        return nu, dr.clip(self.m_nv.eval_1(si, active), 0.0, terms.EXPONENT_MAX)
+
+    def _sample_glossy(self, si, sample2, params):
+        """ωi reflected about a half vector drawn as the paper draws it."""
+        return vector.reflect(si.wi, terms.sample_half(sample2, *params))
+
+    def _glossy_probability(self, si):
+        """The probability of sampling the glossy lobe: the lobes' albedo bounds at cosθi."""
+        return mixture.probability(*terms.albedo_bounds(self._rs_mean, self._rd_mean, si.wi.z))
+
+    def eval_diffuse_reflectance(self, si, active=True):
+        """Rd (1 − Rs): the diffuse term's albedo, but for its factor 1 − (1 − cosθi/2)⁵."""
+        if self._diffuse is None:
+            return mi.Spectrum(0.0)
+        return self.m_diffuse_reflectance.eval(si, active) * (
+            1.0 - self.m_specular_reflectance.eval(si, active))
+
+    def parameters_changed(self, keys=()):
+        """The reflectances' means, which weigh the lobe choice."""
+        self._rs_mean = mi.Float(dr.detach(self.m_specular_reflectance.mean()))
+        self._rd_mean = mi.Float(dr.detach(self.m_diffuse_reflectance.mean())
+                                 if self._diffuse is not None else 0.0)
+        # opaque: a changed parameter updates the kernel's inputs instead of recompiling it
+        dr.make_opaque(self._rs_mean, self._rd_mean)
+
+    def traverse(self, cb):
+        # Only the parameters of lobes that exist: the lobe structure is fixed at load time.
+        if self._diffuse is not None:
+            cb.put("diffuse_reflectance", self.m_diffuse_reflectance, DIFFERENTIABLE)
+        cb.put("specular_reflectance", self.m_specular_reflectance, DIFFERENTIABLE)
+        if self._separate:
+            cb.put("nu", self.m_nu, DISCONTINUOUS)
+            cb.put("nv", self.m_nv, DISCONTINUOUS)
+        else:
+            cb.put("exponent", self.m_nu, DISCONTINUOUS)
+
+    def to_string(self):
+        if self._separate:
+            exponents = (f"  nu = {properties.indent(self.m_nu)},\n"
+                         f"  nv = {properties.indent(self.m_nv)},\n")
+        else:
+            exponents = f"  exponent = {properties.indent(self.m_nu)},\n"
+        return (f"Ashikhmin[\n{exponents}"
+                f"  specular_reflectance = {properties.indent(self.m_specular_reflectance)},\n"
+                f"  diffuse_reflectance = {properties.indent(self.m_diffuse_reflectance)}\n]")
