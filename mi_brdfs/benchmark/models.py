@@ -71,12 +71,12 @@ def _eval_call(bsdf, n: int, seed: int = 0, sample: bool = False):
     si = batch.interaction(wi, n)
     ctx = mi.BSDFContext()
     if sample:
-        s1 = mi.Float(rng.random(n, dtype=np.float32))
-        s2 = mi.Point2f(mi.Float(rng.random(n, dtype=np.float32)),
-                        mi.Float(rng.random(n, dtype=np.float32)))
+        s1 = batch.floats(rng.random(n, dtype=np.float32))
+        s2 = mi.Point2f(batch.floats(rng.random(n, dtype=np.float32)),
+                        batch.floats(rng.random(n, dtype=np.float32)))
         return lambda: bsdf.sample(ctx, si, s1, s2)
     wo = batch.random_directions(rng, n, sphere=False).astype(np.float32)
-    w = mi.Vector3f(mi.Float(wo[:, 0]), mi.Float(wo[:, 1]), mi.Float(wo[:, 2]))
+    w = batch.vectors(wo)
     return lambda: bsdf.eval_pdf(ctx, si, w)
 
 

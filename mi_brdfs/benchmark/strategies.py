@@ -51,9 +51,9 @@ def random_draws(theta: float, n: int, seed: int):
     with, from ``seed``: the same draws for every strategy compared."""
     rng = np.random.default_rng(seed)
     si = batch.interaction(batch.direction(theta), n)
-    s1 = mi.Float(rng.random(n, dtype=np.float32))
-    s2 = mi.Point2f(mi.Float(rng.random(n, dtype=np.float32)),
-                    mi.Float(rng.random(n, dtype=np.float32)))
+    s1 = batch.floats(rng.random(n, dtype=np.float32))
+    s2 = mi.Point2f(batch.floats(rng.random(n, dtype=np.float32)),
+                    batch.floats(rng.random(n, dtype=np.float32)))
     return si, s1, s2
 
 

@@ -46,10 +46,26 @@ def _rows(a, n: int) -> np.ndarray:
     return np.broadcast_to(a, (n, 3)) if a.ndim == 1 else a
 
 
+def floats(a) -> mi.Float:
+    """
+    A NumPy array as ``mi.Float`` in drjit's own alignment. drjit uses the memory of a
+    contiguous array in place, and the kernels it compiles for it depend on where that memory
+    starts: data at an arbitrary address compiles a kernel that the on-disk kernel cache has
+    not seen (a new LLVM compilation in every process); a copy aligned to 64 bytes, as drjit
+    aligns its own arrays, gives the cached kernel.
+    """
+    a = np.asarray(a, dtype=np.float32).ravel()
+    buffer = np.empty(a.nbytes + 64, dtype=np.uint8)
+    start = (-buffer.ctypes.data) % 64
+    out = buffer[start:start + a.nbytes].view(np.float32)
+    out[:] = a
+    return mi.Float(out)
+
+
 def vectors(a: np.ndarray):
     """(n, 3) directions as one ``mi.Vector3f`` of n lanes (JIT variants)."""
     a = np.asarray(a, dtype=np.float32)
-    return mi.Vector3f(mi.Float(a[:, 0]), mi.Float(a[:, 1]), mi.Float(a[:, 2]))
+    return mi.Vector3f(floats(a[:, 0]), floats(a[:, 1]), floats(a[:, 2]))
 
 
 def interaction(wi, n: int | None = None, uv=(0.5, 0.5)):
@@ -65,7 +81,7 @@ def interaction(wi, n: int | None = None, uv=(0.5, 0.5)):
     else:
         si.wi = mi.Vector3f(*[float(x) for x in np.ravel(wi)[:3]])
     uv = np.asarray(uv, dtype=np.float32)
-    si.uv = mi.Point2f(*(mi.Float(c) if is_jit() else float(c) for c in uv.T))
+    si.uv = mi.Point2f(*(floats(c) if is_jit() else float(c) for c in uv.T))
     # the geometry of a flat surface at the origin, parametrised by uv along x and y: wrappers
     # that perturb the frame (bumpmap, normalmap) need the tangents, and a zero dp_du
     # degenerates their frame into NaN or zero vectors
@@ -155,8 +171,8 @@ def sample(bsdf, wi, sample1, sample2, ctx=None) -> Samples:
     n = len(sample1)
     if is_jit():
         si = interaction(wi, n)
-        u = mi.Point2f(mi.Float(sample2[:, 0]), mi.Float(sample2[:, 1]))
-        bs, weight = bsdf.sample(ctx, si, mi.Float(sample1), u)
+        u = mi.Point2f(floats(sample2[:, 0]), floats(sample2[:, 1]))
+        bs, weight = bsdf.sample(ctx, si, floats(sample1), u)
         return Samples(_lanes(_channels(bs.wo, False), n), _lanes(bs.pdf, n),
                        _lanes(_channels(weight), n), _lanes(bs.sampled_type, n, np.int64),
                        _lanes(bs.sampled_component, n, np.int64))

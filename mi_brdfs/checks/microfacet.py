@@ -85,9 +85,7 @@ def _jit_terms(D, G1):
     if not dr.is_jit_v(mi.Float):
         raise RuntimeError("microfacet terms are evaluated on arrays: this needs a JIT variant")
 
-    def vec(a):
-        a = np.asarray(a, dtype=np.float32)
-        return mi.Vector3f(mi.Float(a[:, 0]), mi.Float(a[:, 1]), mi.Float(a[:, 2]))
+    from .batch import vectors as vec
 
     return (lambda m: np.array(D(vec(m)), dtype=np.float64),
             lambda v, m: np.array(G1(vec(v), vec(m)), dtype=np.float64))

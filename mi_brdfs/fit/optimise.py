@@ -143,7 +143,7 @@ def _run_starts(bsdf, params: list[Parameter], candidates: dict, wi, wo, target_
 
     si, w = batch.interaction(wi, len(wi)), batch.vectors(wo)
     projected = target_values * wi[:, 2:3]  # f·cosθi·cosθo
-    target_c = mi.Color3f(*[mi.Float(np.cbrt(projected[:, c] + EPSILON).astype(np.float32))
+    target_c = mi.Color3f(*[batch.floats(np.cbrt(projected[:, c] + EPSILON))
                             for c in range(3)])
     bar = Progress(steps * len(candidates), label=f"fit {spec_text(model)}", unit=" steps") \
         if progress else None

@@ -60,3 +60,33 @@ def test05_a_wrong_value_is_seen(variants_rgb, np_rng):
     e = batch.evaluate({"type": "diffuse", "reflectance": 0.61}, wi, wi)
     with pytest.raises(AssertionError):
         np.testing.assert_allclose(e.value, RHO / np.pi * wi[:, 2:3] * np.ones(3), atol=2e-7)
+
+
+def test09_floats_compile_one_kernel_whatever_the_numpy_address(variant_llvm_ad_rgb):
+    """
+    batch.floats: the same kernel (by hash) for the same data at four addresses (4-byte steps
+    from a 64-byte boundary), so the on-disk kernel cache serves it; drjit's own conversion of
+    the arrays at those addresses, mi.Float(a), compiles different kernels (the cause).
+    """
+    import drjit as dr
+    import mitsuba as mi
+
+    from mi_brdfs.timing import traced_kernels
+
+    values = np.linspace(0.1, 0.9, 1000, dtype=np.float32)
+    base = np.empty(values.nbytes + 128, dtype=np.uint8)
+    start = (-base.ctypes.data) % 64
+
+    def at(offset):
+        a = base[start + offset:start + offset + values.nbytes].view(np.float32)
+        a[:] = values
+        return a
+
+    def irs(convert):
+        return {k["hash"] for offset in (0, 4, 8, 12)
+                for k in traced_kernels(lambda: dr.sin(convert(at(offset))) * 2.0)[1]
+                if "hash" in k}
+
+    assert len(irs(batch.floats)) == 1
+    assert len(irs(mi.Float)) > 1
+    np.testing.assert_array_equal(np.array(batch.floats(values)), values)
