@@ -19,7 +19,8 @@ RES = 16
 
 def test01_every_plugin_and_form_has_a_row():
     plugins = {row.base["type"] for row in gallery.ROWS}
-    assert plugins == {"lambert", "phong", "cooktorrance", "ward", "orennayar"}
+    assert plugins == {"lambert", "phong", "cooktorrance", "ward", "orennayar", "ashikhmin",
+                       "lafortune"}
     forms = {(row.base["type"], row.base.get("form")) for row in gallery.ROWS}
     for form in ("normalized", "lecture", "original"):
         assert ("phong", form) in forms
@@ -32,6 +33,13 @@ def test01_every_plugin_and_form_has_a_row():
     assert any(b.get("distribution") == "ggx" for b in ct)
     assert any(b.get("transmission") for b in ct)
     assert any("alpha_u" in row.spec(0) for row in gallery.ROWS)
+    ashikhmin = [row.spec(c) for row in gallery.ROWS if row.base["type"] == "ashikhmin"
+                 for c in range(len(row.columns))]
+    assert any(spec["nu"] < spec["nv"] for spec in ashikhmin)
+    assert any(spec["nu"] > spec["nv"] for spec in ashikhmin)
+    lobes = {(s["cx_0"] > 0, abs(s["cz_0"]) < -s["cx_0"]) for row in gallery.ROWS
+             if row.base["type"] == "lafortune" for s in map(row.spec, range(len(row.columns)))}
+    assert lobes >= {(True, False), (False, True), (False, False)}  # retro, off-specular, mirror
     assert all(len(row.columns) >= 3 for row in gallery.ROWS)
 
 

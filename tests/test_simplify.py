@@ -436,3 +436,76 @@ def test10_materials_of_included_files_are_named(tmp_path):
     assert [m.label for m in result.materials] == ["ball"]
     assert "note: materials in included file mat.xml (inc (lambert)): left alone (simplify " \
            "edits the scene file only" in result.summary()
+
+
+#: ashikhmin and lafortune in the forms whose candidates differ (test11).
+LOBES = b"""<scene version="3.0.0">
+    <bsdf type="ashikhmin" id="ash_glossy">
+        <float name="specular_reflectance" value="0.9"/>
+        <float name="diffuse_reflectance" value="0.05"/>
+    </bsdf>
+    <bsdf type="ashikhmin" id="ash_diffuse">
+        <rgb name="diffuse_reflectance" value="0.6, 0.5, 0.4"/>
+        <float name="nu" value="10"/><float name="nv" value="100"/>
+    </bsdf>
+    <bsdf type="lafortune" id="laf_mirror">
+        <float name="cx_0" value="-2"/><float name="cy_0" value="-2"/><float name="cz_0" value="2"/>
+        <float name="exponent_0" value="50"/><rgb name="specular_reflectance_0" value="0.7"/>
+        <float name="diffuse_reflectance" value="0.1"/>
+    </bsdf>
+    <bsdf type="lafortune" id="laf_three">
+        <float name="diffuse_reflectance" value="0.3"/>
+        <float name="cx_0" value="-1"/><float name="cy_0" value="-1"/>
+        <float name="cz_0" value="0.8"/>
+        <float name="specular_reflectance_0" value="0.4"/>
+        <float name="cx_1" value="1"/><float name="cy_1" value="1"/><float name="cz_1" value="1"/>
+        <float name="exponent_1" value="5"/><float name="specular_reflectance_1" value="0.02"/>
+        <float name="exponent_2" value="300"/><float name="specular_reflectance_2" value="0.2"/>
+    </bsdf>
+</scene>"""
+
+
+def test11_ashikhmin_and_lafortune_candidates(variant_llvm_ad_rgb):
+    """
+    Candidates without rendering: ashikhmin's diffuse term left out where it is the weaker
+    (its glossy lobe never: F reaches 1 at grazing angles whatever Rs), a fitted lambert where
+    the glossy lobe is the weaker; a lafortune's weakest term left out (its diffuse term, or
+    the weakest of its lobes by the mean albedo at 15°, 45° and 75°), and a one-lobe mirror
+    lafortune as phong, which evaluates to the same values.
+    """
+    from mi_brdfs.bsdfspec import load_bsdf
+    from mi_brdfs.checks import batch
+    from mi_brdfs.simplify import candidates_for
+
+    materials, _ = scene_bsdfs(LOBES)
+    got, fits = {}, {}
+    for m in materials:
+        jobs = []
+        cands = candidates_for(m, {}, lambda *job: jobs.append(job) or "fit skipped")
+        got[m.label] = {label: (element, note) for label, _, element, note in cands}
+        fits[m.label] = jobs
+    assert set(got["ash_glossy"]) == {"ashikhmin, diffuse term left out"}, got["ash_glossy"]
+    element, note = got["ash_glossy"]["ashikhmin, diffuse term left out"]
+    assert ET.tostring(element).count(b'name="diffuse_reflectance" value="0.0"') == 1
+    assert note.startswith("albedo at 45°: diffuse 0.00") and fits["ash_glossy"] == []
+    assert set(got["ash_diffuse"]) == {"lambert (fit)"}, got["ash_diffuse"]
+    assert fits["ash_diffuse"][0][1] == {"type": "lambert",
+                                         "reflectance": {"type": "rgb", "value": [0.6, 0.5, 0.4]}}
+
+    assert set(got["laf_mirror"]) == {"phong", "lafortune, diffuse term left out"}
+    phong = ET.tostring(got["laf_mirror"]["phong"][0], encoding="unicode")
+    assert phong.startswith('<bsdf type="phong" id="laf_mirror">') and "_0" not in phong
+    wi, wo = (batch.random_directions(np.random.default_rng(1), 4096, sphere=False)
+              for _ in range(2))
+    original = batch.evaluate(load_bsdf(materials[2].text), wi, wo).value
+    assert np.array_equal(batch.evaluate(load_bsdf(phong), wi, wo).value, original)
+
+    assert set(got["laf_three"]) == {"lafortune, lobe 1 left out", "lambert (fit)"}
+    element, note = got["laf_three"]["lafortune, lobe 1 left out"]
+    assert note.startswith("mean albedo at 15°, 45°, 75°: diffuse 0.3"), note
+    assert _params_of(element)["specular_reflectance_1"] == "0.0"
+    load_bsdf(ET.tostring(element, encoding="unicode"))
+
+
+def _params_of(element) -> dict:
+    return {c.get("name"): c.get("value") for c in element}

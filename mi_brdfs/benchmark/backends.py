@@ -57,6 +57,22 @@ PAIRS = [
     Pair("phong vs lambert (furnace)", "furnace",
          {"material": "phong", "reflectance_name": "diffuse_reflectance", "reflectance": "0.8"},
          {"material": "lambert", "reflectance": "0.8"}, target=False),
+    # A glossy lobe over a diffuse one against the built-in of that kind, roughplastic (ρd =
+    # 0.8, its defaults: Beckmann α = 0.1, η = 1.49, so R0 ≈ 0.04), in the white furnace:
+    # Ashikhmin-Shirley with its defaults (n = 100, Rs = 0.04: a Blinn-Phong lobe about as
+    # wide, with Schlick's Fresnel), and Lafortune's default lobe, Phong's mirror lobe (n = 30,
+    # ρs = 0.2). Not plastic: its specular lobe is a delta, which a path tracer samples but
+    # never evaluates, so it would price another computation.
+    Pair("ashikhmin vs roughplastic (furnace)", "furnace",
+         {"material": "ashikhmin", "reflectance_name": "diffuse_reflectance",
+          "reflectance": "0.8"},
+         {"material": "roughplastic", "reflectance_name": "diffuse_reflectance",
+          "reflectance": "0.8"}, target=False),
+    Pair("lafortune (mirror lobe) vs roughplastic (furnace)", "furnace",
+         {"material": "lafortune", "reflectance_name": "diffuse_reflectance",
+          "reflectance": "0.8"},
+         {"material": "roughplastic", "reflectance_name": "diffuse_reflectance",
+          "reflectance": "0.8"}, target=False),
 ]
 
 
@@ -264,7 +280,8 @@ def section(ctx: Context) -> Section:
         "(`scenes/metalbox.xml`; brushed: `scenes/brushed.xml`) or the glass sphere "
         "(`scenes/glass.xml`) the plugin, against the built-in (for Phong: against "
         "`lambert`, both plugins, in the white furnace `scenes/furnace.xml`, which prices its "
-        "glossy lobe), same spp and seeds, medians "
+        "glossy lobe; for Ashikhmin-Shirley and Lafortune: against `roughplastic`, a glossy "
+        "lobe over a diffuse one too, in the same furnace), same spp and seeds, medians "
         "of interleaved repeats in one process. In the JIT variant both go through `mi.render`, "
         "after a first render each that traces and compiles (its time is the last column); in "
         "the scalar variant through the package's render path `mi_brdfs.render.render`, which "

@@ -27,7 +27,8 @@ after every step to the image of the parameter's valid range (each plugin's docs
 
 * α, ``alpha_u``, ``alpha_v``: x = log α, α ∈ [10⁻³, 2] (a roughness acts multiplicatively: a
   step of 0.1 in x is 10 % of α, whatever α);
-* ``exponent``: x = log n, n ∈ [10⁻², 10⁶] (Phong exponents span decades, likewise);
+* ``exponent`` (and ``ashikhmin``'s ``nu``, ``nv``, ``lafortune``'s ``exponent_0``, ...):
+  x = log n, n ∈ [10⁻², 10⁶] (Phong exponents span decades, likewise);
 * ``eta``: x = (η − 1)/(η + 1), η ∈ [0, 10³]: for k = 0, R0 = x², so the Fresnel reflectance
   moves evenly with x, up to R0 → 1 (gold's red R0 = 0.967 needs a Schlick η ≈ 106, which
   log η approaches slowly: the gradient in log η fades as 4/η);
@@ -35,7 +36,13 @@ after every step to the image of the parameter's valid range (each plugin's docs
 * ``sigma``: x = σ², σ ∈ [10⁻³, π/2]: Oren & Nayar's (1994) coefficients depend on σ², so the
   objective is flat in σ at σ = 0, where a fit that passes through 0 would stay; in σ² it is not
   (the floor 10⁻³ keeps the square root differentiable; σ = 10⁻³ is Lambert to 10⁻⁶);
+* ``lafortune``'s coefficients ``cx_i``, ``cy_i``, ``cz_i``: x = C, of any sign (with its
+  default ``normalize`` the lobe depends on C/max|C| only, so C and λC are one lobe: leave one
+  coefficient fixed, e.g. ``cx_i`` and ``cy_i`` at −1 with ``cz_i`` free);
 * reflectances and transmittances: x = ρ ∈ [0, 1]; any other parameter: x = v ≥ 0.
+
+A numbered parameter of ``lafortune`` (``exponent_1``, ``specular_reflectance_1``) is fitted as
+the parameter of its kind is.
 
 One learning rate then suits every parameter (0.1 in x), decayed along a cosine to 1/100 of it
 over the run so that the last steps settle instead of oscillating.
@@ -83,10 +90,12 @@ as written (values rounded to 6 significant digits), loaded afresh.
 least convex. ``starts='auto'`` runs from the values MODEL gives (or its defaults) and, where
 target and model both have a lobe width, from the closed-form mapping between them (Walter et
 al. 2007, "Microfacet Models for Refraction through Rough Surfaces", EGSR, §5.2: the Blinn-Phong
-exponent n and the Beckmann roughness α match for n = 2/α² − 2; Ward's α is Beckmann's; a mirror
-Phong lobe of exponent n/4 is about as wide as a halfway lobe of exponent n; GGX's α is taken as
-Beckmann's, a start, not an equivalence), else from the given width divided and multiplied by 4,
-and keeps the run with the lowest objective. ``starts='given'`` runs from MODEL's values only.
+exponent n and the Beckmann roughness α match for n = 2/α² − 2, and so do Ashikhmin &
+Shirley's nu, nv, whose lobe is a Blinn-Phong one; Ward's α is Beckmann's; a mirror Phong lobe
+of exponent n/4, and a Lafortune lobe taken as one, is about as wide as a halfway lobe of
+exponent n; GGX's α is taken as Beckmann's, a start, not an equivalence), else from the given
+width divided and multiplied by 4, and keeps the run with the lowest objective.
+``starts='given'`` runs from MODEL's values only.
 
 **Cost.** A step evaluates MODEL once on every pair, with its gradient, so a fit costs in
 proportion to pairs × steps × starts, plus the albedo comparison at the end. A built-in whose

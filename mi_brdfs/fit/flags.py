@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from .optimise import EPSILON
-from .parameters import Parameter
+from .parameters import Parameter, base_name
 
 #: How close to a bound (a fraction of the width of the transformed range) counts as at it.
 AT_BOUND = 1e-5
@@ -25,10 +25,18 @@ EXACT = 1e-3
 def _natural_lower(name: str) -> bool:
     """Whether the lower bound of ``name`` is a physical value, not a limit of the model: k = 0
     (a dielectric), a reflectance of 0 (no such lobe), σ at its floor (Lambert)."""
-    return name in ("k", "sigma") or name.endswith(("reflectance", "transmittance"))
+    return name in ("k", "sigma") or base_name(name).endswith(("reflectance", "transmittance"))
 
-#: Models whose albedo at normal incidence is about ρd + ks (phong in its normalized form).
-_SUMMED = ("phong", "ward", "cooktorrance")
+
+#: Models whose albedo at normal incidence is about ρd + ks (phong in its normalized form), or
+#: ρd + Σ ρs,i over the lobes (lafortune in its normalized form, Lafortune et al. 1997 with
+#: Phong's normalisation per lobe). Not ``ashikhmin``: its diffuse term is weighed by 1 − Rs
+#: and its specular albedo is at most Rs + (1 − Rs)(1 − cosθi/2)⁵, so it conserves energy for
+#: every Rs, Rd in [0, 1] (Ashikhmin & Shirley 2000, their diffuse term).
+_SUMMED = ("phong", "ward", "cooktorrance", "lafortune")
+
+#: The models of :data:`_SUMMED` whose sum holds in one form only: (parameter, that form).
+_SUMMED_FORM = {"phong": ("form", "normalized"), "lafortune": ("normalize", True)}
 
 
 def _show(value) -> str:
@@ -80,19 +88,42 @@ def _zero_model(figures: dict, wi, target_values, loss: float) -> list[str]:
     return out
 
 
+def _summed(spec: dict) -> list[str]:
+    """The reflectances whose sum is about the albedo of ``spec`` at normal incidence
+    (:data:`_SUMMED`), when the spec gives the diffuse one and a specular one; else []."""
+    kind = spec["type"]
+    form = _SUMMED_FORM.get(kind)
+    if kind not in _SUMMED or (form and spec.get(form[0], form[1]) != form[1]) \
+            or "diffuse_reflectance" not in spec:
+        return []
+    specular = [k for k in spec if base_name(k) == "specular_reflectance" and _at_normal(spec, k)]
+    return ["diffuse_reflectance"] + specular if specular else []
+
+
+def _at_normal(spec: dict, name: str) -> bool:
+    """Whether the lobe of reflectance ``name`` reflects about its ρs at normal incidence: every
+    lobe but a ``lafortune`` lobe whose |Cz| is below max(|Cx|, |Cy|), which leans towards
+    grazing angles (Lafortune et al. 1997's off-specular lobe: (|Cz|/max|C|)ⁿ ρs there)."""
+    index = name[len("specular_reflectance_"):]
+    if not index:
+        return True
+    c = [abs(float(spec.get(f"c{axis}_{index}", default)))
+         for axis, default in zip("xyz", (-1.0, -1.0, 1.0))]  # the plugin's mirror lobe
+    return c[2] >= max(c)
+
+
 def _energy(spec: dict, figures: dict) -> list[str]:
-    """Flags of an unphysical fitted BSDF: ρd + ks > 1, an albedo above 1."""
+    """Flags of an unphysical fitted BSDF: ρd + ks (+ ...) > 1, an albedo above 1."""
     out = []
-    summed = spec["type"] in _SUMMED and (spec["type"] != "phong"
-                                          or spec.get("form", "normalized") == "normalized")
-    if summed and "diffuse_reflectance" in spec and "specular_reflectance" in spec:
-        channels = [np.broadcast_to(np.asarray(v["value"] if isinstance(v, dict) else v,
-                                               dtype=np.float64), 3)
-                    for v in (spec["diffuse_reflectance"], spec["specular_reflectance"])]
-        total = float(np.max(channels[0] + channels[1]))
+    names = _summed(spec)
+    if names:
+        channels = [np.broadcast_to(np.asarray(spec[n]["value"] if isinstance(spec[n], dict)
+                                               else spec[n], dtype=np.float64), 3)
+                    for n in names]
+        total = float(np.max(np.sum(channels, axis=0)))
         if total > 1.0 + 1e-3:
-            out.append(f"diffuse_reflectance + specular_reflectance = {total:.4g} > 1: the "
-                       f"fitted {spec['type']} reflects more light than it receives")
+            out.append(f"{' + '.join(names)} = {total:.4g} > 1: the fitted {spec['type']} "
+                       f"reflects more light than it receives")
     albedo = np.asarray(figures["albedo_fit"], dtype=np.float64)
     if albedo.size and float(np.nanmax(albedo)) > 1.0 + 1e-3:
         i = np.unravel_index(int(np.nanargmax(albedo)), albedo.shape)[0]

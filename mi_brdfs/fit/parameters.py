@@ -8,6 +8,7 @@ starts of a lobe width (see :mod:`mi_brdfs.fit`).
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,8 +16,16 @@ import numpy as np
 from ..errors import MiBrdfsError
 from .spec import _number, _plain, _rgb, spec_text
 
-#: Widths of a lobe: one number each, fitted in log space.
-WIDTHS = ("alpha", "alpha_u", "alpha_v", "exponent")
+#: Widths of a lobe: one number each, fitted in log space (``exponent_0``, ``exponent_1``, ...
+#: of a model with numbered lobes too, :func:`base_name`).
+WIDTHS = ("alpha", "alpha_u", "alpha_v", "exponent", "nu", "nv")
+
+#: Widths that are exponents: the lobe narrows as they grow (Phong's n, Ashikhmin & Shirley's
+#: nu and nv).
+EXPONENTS = ("exponent", "nu", "nv")
+
+#: Coefficients of a lobe, of any sign (Lafortune et al. 1997's Cx, Cy, Cz).
+_SIGNED = ("cx", "cy", "cz")
 
 #: Parameters with the spectrum's channels (fitted per RGB channel) among texture-valued ones.
 _SPECTRAL_NAMES = ("eta", "k", "base_color")
@@ -25,12 +34,21 @@ _SPECTRAL_NAMES = ("eta", "k", "base_color")
 _MICROFACET = ("cooktorrance", "roughconductor", "roughplastic", "roughdielectric", "ward")
 
 
+def base_name(name: str) -> str:
+    """A parameter's name without the index of its lobe: ``exponent_1`` → ``exponent``,
+    ``specular_reflectance_0`` → ``specular_reflectance`` (``lafortune`` numbers its lobes)."""
+    return re.sub(r"_[0-9]+$", "", name)
+
+
 def _bounds(name: str):
     """(transform, lower, upper) of parameter ``name`` (see :mod:`mi_brdfs.fit`)."""
+    name = base_name(name)
     if name in ("alpha", "alpha_u", "alpha_v"):
         return "log", 1e-3, 2.0
-    if name == "exponent":
+    if name in EXPONENTS:
         return "log", 1e-2, 1e6
+    if name in _SIGNED:
+        return "linear", -math.inf, math.inf
     if name == "eta":
         return "fresnel", 0.0, 1e3
     if name == "k":
@@ -125,6 +143,7 @@ def _fittable(bsdf) -> dict:
 
 def _spectral(name: str, key: str) -> bool:
     """Whether a texture-valued parameter has spectrum channels (fitted per RGB channel)."""
+    name = base_name(name)
     return key.endswith(".value") and (name.endswith(("reflectance", "transmittance"))
                                        or name in _SPECTRAL_NAMES)
 
@@ -160,7 +179,8 @@ def _free_names(free, available: dict, model) -> list[str]:
 def _prepare_model(model: dict, free) -> tuple[dict, list[str]]:
     """
     The model dict to fit (spectral free parameters promoted to RGB; ``eta`` and ``k`` written
-    out, and ``material`` dropped, when one of them is free) and the free names.
+    out, and ``material`` dropped, when one of them is free; a lobe's three coefficients written
+    out when one of them is free) and the free names.
     """
     from ..bsdfspec import load_bsdf
 
@@ -176,7 +196,17 @@ def _prepare_model(model: dict, free) -> tuple[dict, list[str]]:
         key, value = available[name]
         if _spectral(name, key):
             spec[name] = _rgb(value)
+        for sibling in _coefficients_of(name):  # a lobe takes all three of its C, or none
+            if sibling not in spec and sibling in available:
+                spec[sibling] = _plain(available[sibling][1])
     return spec, names
+
+
+def _coefficients_of(name: str) -> list[str]:
+    """The three coefficients of the lobe of coefficient ``name`` (``cz_0`` → ``cx_0``,
+    ``cy_0``, ``cz_0``: ``lafortune`` takes all three or none), else []."""
+    base = base_name(name)
+    return [base[:-1] + axis + name[len(base):] for axis in "xyz"] if base in _SIGNED else []
 
 
 def _accepted(model: dict, available: dict) -> dict:
@@ -235,11 +265,18 @@ def _scalar(values: dict, name: str):
     return float(np.mean(values[name][1])) if name in values else None
 
 
+def _halfway_alpha(n: float) -> float:
+    """Beckmann's α of a halfway Phong lobe of exponent n (Walter et al. 2007, §5.2)."""
+    return math.sqrt(2.0 / (n + 2.0))
+
+
 def beckmann_width(spec, values: dict | None = None):
     """
     The Beckmann roughness α equivalent to the lobe of ``spec`` (a dict), or None: α itself for
     microfacet models and Ward (√(αu·αv) when anisotropic), √(2/(n+2)) for a halfway Phong lobe of
-    exponent n (Walter et al. 2007, §5.2), and that of exponent 4n for a mirror lobe.
+    exponent n (Walter et al. 2007, §5.2), Ashikhmin & Shirley's (n·h)ⁿ among them (√(αu·αv) of
+    nu and nv), and that of exponent 4n for a mirror lobe (``phong``'s, and ``lafortune``'s
+    lobe 0 taken as one).
     """
     from ..bsdfspec import load_bsdf
 
@@ -253,22 +290,34 @@ def beckmann_width(spec, values: dict | None = None):
         if "alpha_u" in values and "alpha_v" in values:
             return math.sqrt(_scalar(values, "alpha_u") * _scalar(values, "alpha_v"))
         return None
-    if kind == "phong" and "exponent" in values:
-        n = _scalar(values, "exponent")
-        n_halfway = n if spec.get("lobe", "mirror") == "halfway" else 4 * n
-        return math.sqrt(2.0 / (n_halfway + 2.0))
+    if kind == "ashikhmin":
+        if "exponent" in values:
+            return _halfway_alpha(_scalar(values, "exponent"))
+        if "nu" in values and "nv" in values:
+            return math.sqrt(_halfway_alpha(_scalar(values, "nu"))
+                             * _halfway_alpha(_scalar(values, "nv")))
+        return None
+    name = {"phong": "exponent", "lafortune": "exponent_0"}.get(kind)
+    if name in values:
+        halfway = kind == "phong" and spec.get("lobe", "mirror") == "halfway"
+        n = _scalar(values, name)
+        return _halfway_alpha(n if halfway else 4 * n)
     return None
 
 
 def _width_start(spec: dict, names: list[str], alpha: float) -> dict:
     """{name: value} of the model's free width parameters for a Beckmann roughness α."""
     kind, start = spec["type"], {}
+    n = 2.0 / alpha ** 2 - 2.0  # the halfway lobe's exponent; a mirror lobe's is n/4
     for name in names:
         if name in ("alpha", "alpha_u", "alpha_v") and kind in _MICROFACET:
             start[name] = alpha
         elif name == "exponent" and kind == "phong":
-            n = 2.0 / alpha ** 2 - 2.0
             start[name] = n if spec.get("lobe", "mirror") == "halfway" else n / 4
+        elif name in EXPONENTS and kind == "ashikhmin":
+            start[name] = n
+        elif base_name(name) == "exponent" and kind == "lafortune":
+            start[name] = n / 4
     return start
 
 
@@ -278,7 +327,7 @@ def _starts(starts: str, spec: dict, names: list[str], given: dict, target, targ
     the closed-form width mapping from the target's lobe or else the given widths ÷ and × 4.
     """
     candidates = {"given": given}
-    width_names = [n for n in names if n in WIDTHS]
+    width_names = [n for n in names if base_name(n) in WIDTHS]
     if starts == "auto" and width_names:
         alpha = beckmann_width(target if isinstance(target, dict) else None,
                                _fittable(target_bsdf))
@@ -289,6 +338,6 @@ def _starts(starts: str, spec: dict, names: list[str], given: dict, target, targ
         else:
             for label, factor in (("widths ÷ 4", 0.25), ("widths × 4", 4.0)):
                 candidates[label] = dict(given, **{
-                    n: given[n] * (factor if n != "exponent" else 1 / factor)
+                    n: given[n] * (factor if base_name(n) not in EXPONENTS else 1 / factor)
                     for n in width_names})
     return candidates

@@ -17,14 +17,20 @@ inside ``twosided``, ``blendbsdf``, ``mask``, ... are found too):
   (``beckmann``/``ggx``), the other ``sample_visible``; ``orennayar`` ``form=qualitative``;
 * the weaker lobe of a two-lobe model left out (``phong``, ``ward``, ``cooktorrance`` with a
   diffuse base; weaker by directional albedo at 45°): a glossy-only model, or ``diffuse`` with
-  the diffuse lobe's reflectance;
+  the diffuse lobe's reflectance; ``ashikhmin``'s diffuse term where it is the weaker (its
+  glossy lobe cannot be left out: F reaches 1 at grazing angles whatever Rs); ``lafortune``'s
+  weakest term, its diffuse term or a lobe (weakest by the mean albedo at 15°, 45° and 75°, as
+  an off-specular lobe reflects mostly towards grazing incidence and a retro-reflective one
+  towards normal incidence);
 * the built-in that computes the same model: ``lambert`` → ``diffuse``; reflecting
   ``cooktorrance`` → ``roughconductor`` (the same α, distribution, material or η/k: exact with
   ``shadowing=smith``, Smith's masking in place of the V-cavity's otherwise);
-  ``cooktorrance transmission=true`` → ``roughdielectric``;
+  ``cooktorrance transmission=true`` → ``roughdielectric``; and, a plugin computing the same,
+  a normalized one-lobe ``lafortune`` whose lobe is Phong's mirror lobe (−Cx = −Cy = Cz) →
+  ``phong`` (its normalized mirror lobe);
 * cheaper models fitted with :func:`mi_brdfs.fit.fit`: ``diffuse`` (a fitted ``lambert``) for
-  ``orennayar`` and for a ``phong``/``ward`` whose glossy lobe is the weaker, a Blinn-Phong
-  ``phong`` for an isotropic ``cooktorrance``.
+  ``orennayar`` and for a ``phong``/``ward``/``ashikhmin``/``lafortune`` whose glossy lobes are
+  the weaker, a Blinn-Phong ``phong`` for an isotropic ``cooktorrance``.
 
 Built-ins (``diffuse``, ``roughconductor``, ...) get no candidates: they are listed as kept,
 as are wrappers (their nested BSDFs, inline or by ``<ref>``, are listed apart), a material

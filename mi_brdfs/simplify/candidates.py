@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import math
+import re
 import warnings
 import xml.etree.ElementTree as ET
 
@@ -22,46 +23,140 @@ from .measure import _key
 from .scene import Material
 
 #: Our plugins: the materials with candidates.
-OURS = ("lambert", "phong", "cooktorrance", "ward", "orennayar")
+OURS = ("lambert", "phong", "cooktorrance", "ward", "orennayar", "ashikhmin", "lafortune")
+
+#: A ``lafortune`` lobe property: its kind, "_", the lobe's index (as the plugin reads them).
+_LOBE_PROPERTY = re.compile(r"^(cx|cy|cz|exponent|specular_reflectance)_(0|[1-9][0-9]*)$")
 
 
-def _lobe_albedos(element: ET.Element, diffuse: str, glossy: str) -> tuple:
+def _lafortune_terms(p: dict) -> list[str]:
     """
-    (E_diffuse, E_glossy): mean directional albedo at 45° of each lobe of a two-lobe model
-    alone (the other lobe's reflectance set to 0); None where the element does not load.
+    The reflectances of a ``lafortune``'s terms that are not the constant 0, in component
+    order: ``diffuse_reflectance``, then ``specular_reflectance_i`` of each lobe (one more lobe
+    than the largest index of a lobe property, as the plugin counts them; one when none).
     """
+    indices = [int(m.group(2)) for m in map(_LOBE_PROPERTY.match, p) if m]
+    lobes = max(indices) + 1 if indices else 1
+    names = ["diffuse_reflectance"] + [f"specular_reflectance_{i}" for i in range(lobes)]
+    return [n for n in names if not _zero(p.get(n))]
+
+
+def _terms(p: dict, kind: str) -> list[str]:
+    """The reflectances of the terms of a model with several, but for those that are 0."""
+    if kind == "lafortune":
+        return _lafortune_terms(p)
+    return [n for n in ("diffuse_reflectance", "specular_reflectance") if not _zero(p.get(n))]
+
+
+#: Incident angles (degrees) at which a term's albedo is weighed: 45°, and for ``lafortune``,
+#: whose off-specular lobes (|Cz| < max|C|) reflect little but towards grazing incidence and
+#: whose retro-reflective ones (Cx, Cy > 0) most towards normal incidence, the mean of three.
+_THETAS = {"lafortune": (15.0, 45.0, 75.0)}
+
+
+def _albedo(element: ET.Element, thetas=(45.0,)) -> float | None:
+    """The directional albedo of ``element``, mean over RGB and the incident angles ``thetas``
+    (degrees); None where it does not load."""
     from ..bsdfspec import load_bsdf
     from ..checks.albedo import albedo_quadrature
 
-    out = []
-    for keep, drop in ((diffuse, glossy), (glossy, diffuse)):
-        e = _set(copy.deepcopy(element), "float", drop, 0.0)
-        try:
-            bsdf = load_bsdf(ET.tostring(e, encoding="unicode"))
-            out.append(float(np.mean(albedo_quadrature(bsdf, math.radians(45.0), 64, 64))))
-        except (MiBrdfsError, RuntimeError):
-            return None, None
-    return tuple(out)
+    try:
+        bsdf = load_bsdf(ET.tostring(element, encoding="unicode"))
+        return float(np.mean([albedo_quadrature(bsdf, math.radians(t), 64, 64)
+                              for t in thetas]))
+    except (MiBrdfsError, RuntimeError):
+        return None
+
+
+def _term_albedos(element: ET.Element, kind: str) -> dict | None:
+    """
+    {reflectance: directional albedo of that term alone (at :data:`_THETAS`)} of each term of
+    :func:`_terms` (each alone: the others' reflectances set to 0); None where an element does
+    not load. ``ashikhmin``'s glossy lobe is never 0 (F reaches 1 at grazing angles) and its
+    Rs weighs the diffuse term, so there the diffuse term's albedo is the whole's less that of
+    the glossy lobe alone (Rd = 0).
+    """
+    if kind == "ashikhmin":
+        whole = _albedo(element)
+        glossy = _albedo(_set(copy.deepcopy(element), "float", "diffuse_reflectance", 0.0))
+        if whole is None or glossy is None:
+            return None
+        return {"diffuse_reflectance": whole - glossy, "specular_reflectance": glossy}
+    names, out = _terms(_params(element), kind), {}
+    for keep in names:
+        e = copy.deepcopy(element)
+        for drop in names:
+            if drop != keep:
+                _set(e, "float", drop, 0.0)
+        out[keep] = _albedo(e, _THETAS.get(kind, (45.0,)))
+        if out[keep] is None:
+            return None
+    return out
+
+
+def _term_label(name: str) -> str:
+    """A term of :func:`_terms` in words: diffuse, glossy, lobe i."""
+    if name == "diffuse_reflectance":
+        return "diffuse"
+    return "glossy" if name == "specular_reflectance" else f"lobe {name.rsplit('_', 1)[1]}"
+
+
+#: The diffuse reflectance of each model where the element gives none.
+_DIFFUSE_DEFAULTS = {"phong": 0.5, "ward": 0.5, "cooktorrance": 0.0, "ashikhmin": 0.5,
+                     "lafortune": 0.5}
 
 
 def _two_lobes(element, values, kind: str) -> list:
-    """The weaker lobe of a phong, ward or cooktorrance (with a diffuse base) left out."""
-    defaults = {"phong": (0.5, 0.2), "ward": (0.5, 0.2), "cooktorrance": (0.0, 1.0)}[kind]
+    """
+    The weakest term left out: of a phong, ward, cooktorrance (with a diffuse base) or
+    lafortune (its diffuse term or a lobe), and of an ashikhmin its diffuse term only (the
+    glossy lobe cannot be left out: F reaches 1 at grazing angles whatever Rs).
+    """
     p = _params(values)
     if kind == "cooktorrance" and (p.get("transmission") or "diffuse_reflectance" not in p
                                    or _zero(p.get("diffuse_reflectance"))):
         return []
-    if _zero(p.get("diffuse_reflectance")) or _zero(p.get("specular_reflectance")):
+    terms = _terms(p, kind)
+    if len(terms) < 2:
         return []  # one lobe already
-    e_d, e_s = _lobe_albedos(values, "diffuse_reflectance", "specular_reflectance")
-    if e_d is None:
+    albedos = _term_albedos(values, kind)
+    if albedos is None:
         return []
-    shares = f"albedo at 45°: diffuse {e_d:.3g}, glossy {e_s:.3g}"
-    if e_d <= e_s:
-        return [(f"{kind}, diffuse lobe left out", "lobe left out",
+    thetas = _THETAS.get(kind, (45.0,))
+    shares = (f"albedo at {thetas[0]:g}°: " if len(thetas) == 1 else
+              f"mean albedo at {', '.join(f'{t:g}°' for t in thetas)}: ") + ", ".join(
+        f"{_term_label(n)} {e:.3g}" for n, e in albedos.items())
+    weakest = min(albedos, key=albedos.get)  # the first of equals: the diffuse term
+    if weakest == "diffuse_reflectance":
+        term = "term" if kind in ("ashikhmin", "lafortune") else "lobe"
+        return [(f"{kind}, diffuse {term} left out", "lobe left out",
                  _set(copy.deepcopy(element), "float", "diffuse_reflectance", 0.0), shares)]
-    return [("diffuse: the glossy lobe left out", "lobe left out",
-             _diffuse_of(element, "diffuse_reflectance", defaults[0]), shares)]
+    if kind == "ashikhmin":
+        return []
+    if terms == ["diffuse_reflectance", weakest]:
+        return [("diffuse: the glossy lobe left out", "lobe left out",
+                 _diffuse_of(element, "diffuse_reflectance", _DIFFUSE_DEFAULTS[kind]), shares)]
+    return [(f"lafortune, {_term_label(weakest)} left out", "lobe left out",
+             _set(copy.deepcopy(element), "float", weakest, 0.0), shares)]
+
+
+def _to_phong(element, p) -> tuple | None:
+    """
+    A normalized ``lafortune`` with one lobe, Phong's mirror lobe (-Cx = -Cy = Cz > 0, or no
+    coefficient: the default), → ``phong`` (mirror lobe, normalized form): the same model, as
+    the plugin computes it (Lafortune et al. 1997 after Lafortune & Willems 1994).
+    """
+    if p.get("normalize", True) is not True or "specular_reflectance_0" not in _terms(
+            p, "lafortune") or any(_LOBE_PROPERTY.match(n) and not n.endswith("_0") for n in p):
+        return None  # the paper's form, no lobe or more than one
+    c = [p.get(f"c{axis}_0", default) for axis, default in zip("xyz", (-1.0, -1.0, 1.0))]
+    if not all(isinstance(v, float) for v in c) or not (-c[0] == -c[1] == c[2] > 0):
+        return None
+    out = _drop(_retyped(element, "phong"), "normalize", "cx_0", "cy_0", "cz_0")
+    for child in out:
+        if child.get("name") in ("exponent_0", "specular_reflectance_0"):
+            child.set("name", child.get("name")[:-2])
+    return ("phong", "switch", out, "the same model (Phong's normalized mirror lobe)")
 
 
 def _to_roughconductor(element, p) -> tuple | None:
@@ -130,9 +225,11 @@ def _fit_candidates(element, values, kind, fit_fn) -> list:
                      "the same ρ (a texture: not fitted)")]
         rho = spec.get("reflectance", 0.5)
         jobs.append(({"type": "lambert", "reflectance": rho}, None))
-    elif kind in ("phong", "ward") and spec is not None and not _zero(p.get("diffuse_reflectance")):
-        e_d, e_s = _lobe_albedos(values, "diffuse_reflectance", "specular_reflectance")
-        if e_d is not None and e_s < e_d:
+    elif kind in ("phong", "ward", "ashikhmin", "lafortune") and spec is not None \
+            and not _zero(p.get("diffuse_reflectance")):
+        albedos = _term_albedos(values, kind)  # a fitted lambert where the glossy part is weaker
+        diffuse = (albedos or {}).pop("diffuse_reflectance", None)
+        if diffuse is not None and sum(albedos.values()) < diffuse:
             jobs.append(({"type": "lambert", "reflectance": spec.get("diffuse_reflectance", 0.5)},
                          None))
     elif kind == "cooktorrance" and spec is not None and not p.get("transmission") \
@@ -215,8 +312,10 @@ def candidates_for(material: Material, values: dict, fit_fn) -> list:
             _to_roughconductor(element, p)
         if builtin:
             out.append(builtin)
+    if kind == "lafortune" and _to_phong(element, p):
+        out.append(_to_phong(element, p))
     out += _switches(element, p, kind)
-    if kind in ("phong", "ward", "cooktorrance"):
+    if kind in ("phong", "ward", "cooktorrance", "ashikhmin", "lafortune"):
         out += _two_lobes(element, subst, kind)
     if fit_fn is not None:
         out += _fit_candidates(element, subst, kind, fit_fn)
