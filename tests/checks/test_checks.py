@@ -1,7 +1,8 @@
 """
 The validation toolkit: every check accepts correct BSDFs (Mitsuba's diffuse and roughconductor,
 our lambert, the defect-free control) and rejects the BSDF with the defect it is there to find.
-Sample counts are small: the big numbers belong to the validation campaign.
+Sample counts are small: the big numbers belong to the validation campaign. The correct BSDFs
+are checked in one test per check (and variant), each named in the assertion's message.
 """
 
 import math
@@ -39,10 +40,10 @@ def any_variant(request):
 
 # -- χ² ---------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("name", GOOD)
-def test01_chi2_accepts(jit, name):
-    result = checks.chi2_bsdf(GOOD[name], wi=[0.5, 0.2, 0.84], sample_count=200_000)
-    assert result.passed, result.message
+def test01_chi2_accepts(jit):
+    for name, spec in GOOD.items():
+        result = checks.chi2_bsdf(spec, wi=[0.5, 0.2, 0.84], sample_count=200_000)
+        assert result.passed, (name, result.message)
 
 
 def test02_chi2_rejects_wrong_pdf(jit):
@@ -65,10 +66,10 @@ def test04_chi2_resolution_follows_the_lobe(jit):
 
 # -- consistency --------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("name", GOOD)
-def test05_consistency_accepts(any_variant, name):
-    result = checks.check_consistency(GOOD[name], n=20_000 if "llvm" in any_variant else 200)
-    assert result.passed, result.message
+def test05_consistency_accepts(any_variant):
+    for name, spec in GOOD.items():
+        result = checks.check_consistency(spec, n=20_000 if "llvm" in any_variant else 200)
+        assert result.passed, (name, result.message)
 
 
 @pytest.mark.parametrize("defect,what", [("weight", "weight vs eval/pdf"),
@@ -116,26 +117,28 @@ def test06c_consistency_ignores_failed_samples_and_rejects_vacuity(variant_llvm_
 THETAS = (0.0, 45.0, 80.0)
 
 
-@pytest.mark.parametrize("name", GOOD)
-def test07_energy_accepts(jit, name):
-    result = checks.check_energy(GOOD[name], THETAS, n=100_000)
-    assert result.passed, result.message
+def test07_energy_accepts(jit):
+    for name, spec in GOOD.items():
+        result = checks.check_energy(spec, THETAS, n=100_000)
+        assert result.passed, (name, result.message)
 
 
 def test08_energy_rejects_energy_gain(any_variant):
-    result = checks.check_energy(broken("energy"), THETAS, n=2_000)
+    """Both estimators of the broken Lambert are exact (its sample weight and our eval()/pdf
+    are constants), so 200 samples per angle find 1.5 as well as any number."""
+    result = checks.check_energy(broken("energy"), THETAS, n=200)
     assert not result.passed and result.value == pytest.approx(1.5, rel=1e-3)
     assert "creates energy" in result.message
     # eval() 3× too large (albedo 1.5) while the sample weights are right (albedo 0.5)
-    result = checks.check_energy(broken("eval"), THETAS, n=2_000)
+    result = checks.check_energy(broken("eval"), THETAS, n=200)
     assert not result.passed and "from eval()" in result.message, result.message
     assert result.value == pytest.approx(1.5, rel=1e-3)
 
 
-@pytest.mark.parametrize("name", GOOD)
-def test09_albedo_agreement_accepts(jit, name):
-    result = checks.check_albedo_agreement(GOOD[name], THETAS, n=100_000)
-    assert result.passed, result.message
+def test09_albedo_agreement_accepts(jit):
+    for name, spec in GOOD.items():
+        result = checks.check_albedo_agreement(spec, THETAS, n=100_000)
+        assert result.passed, (name, result.message)
 
 
 def test10_albedo_agreement_rejects_weight_without_cosine(jit):
@@ -155,11 +158,11 @@ def test11_albedo_estimators_agree_with_closed_form(jit):
 
 # -- reciprocity, positivity, stability ---------------------------------------------------------
 
-@pytest.mark.parametrize("name", GOOD)
-def test12_reciprocity_and_positivity_accept(any_variant, name):
-    for check in (checks.check_reciprocity, checks.check_positivity):
-        result = check(GOOD[name])
-        assert result.passed, result.message
+def test12_reciprocity_and_positivity_accept(any_variant):
+    for name, spec in GOOD.items():
+        for check in (checks.check_reciprocity, checks.check_positivity):
+            result = check(spec)
+            assert result.passed, (name, result.message)
 
 
 def test13_reciprocity_rejects_one_sided_dependence(any_variant):
@@ -192,14 +195,19 @@ def test14_positivity_rejects(any_variant, defect):
     assert not result.passed and result.details["negative" if defect == "negative" else "nonfinite"]
 
 
-@pytest.mark.parametrize("name", GOOD)
-def test15_stability_accepts(any_variant, name):
-    result = checks.check_stability(GOOD[name])
-    assert result.passed, result.message
+#: Random pairs of the stability sweep beside its stress directions: the NaN of ``nan`` lies at
+#: cosθo < 1e-3, which the stress directions (wo tangent) hit whatever the random count.
+N_RANDOM = 200
+
+
+def test15_stability_accepts(any_variant):
+    for name, spec in GOOD.items():
+        result = checks.check_stability(spec, n_random=N_RANDOM)
+        assert result.passed, (name, result.message)
 
 
 def test16_stability_rejects_nan_at_grazing(any_variant):
-    result = checks.check_stability(broken("nan"))
+    result = checks.check_stability(broken("nan"), n_random=N_RANDOM)
     assert not result.passed and "NaN eval" in result.message and "wo tangent" in result.message
 
 
@@ -276,18 +284,16 @@ def test22_microfacet_terms_reject(jit):
 # -- battery and pytest helpers -----------------------------------------------------------------
 
 def test23_battery_on_builtin(jit):
-    results = checks.run_battery("roughconductor alpha=0.3", quick=True, progress=False)
+    """The quick battery on a two-lobe built-in (a Dirac coating over a diffuse base): every
+    check passes, the lobe checks among them. On a broken BSDF it flags the defect and only
+    that: tests/cli/test_cli_checks.py, test02 (mi-brdfs check runs the battery)."""
+    results = checks.run_battery("plastic", quick=True, progress=False)
     names = [r.name for r in results]
     assert names[:4] == ["consistency", "chi2 θ=0°", "chi2 θ=45°", "chi2 θ=84.26°"]
-    assert all(r.passed for r in results), checks.format_table(results)
+    assert "lobes" in names and "pdf integral" in names
+    assert all(r.passed and not r.skipped for r in results), checks.format_table(results)
     table = checks.format_table(results)
     assert "check" in table.splitlines()[0] and "FAIL" not in table
-
-
-def test24_battery_flags_the_broken(jit):
-    results = {r.name: r for r in checks.run_battery(broken("energy"), quick=True,
-                                                     progress=False)}
-    assert not results["energy"].passed and results["consistency"].passed
 
 
 def test25_pytest_helpers_raise_with_the_message(any_variant):
