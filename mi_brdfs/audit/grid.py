@@ -247,6 +247,15 @@ def package_cases() -> list[Case]:
         case("ward", "original αu=0.1 αv=0.4", {"type": "ward", "form": "original",
                                                 "alpha_u": 0.1, "alpha_v": 0.4}),
         case("orennayar", "full σ=0.5", {"type": "orennayar", "form": "full", "sigma": 0.5}),
+        case("ashikhmin", "default (n = 100)", {"type": "ashikhmin"}),
+        case("ashikhmin", "nu=10 nv=1000", {"type": "ashikhmin", "nu": 10.0, "nv": 1000.0}),
+        case("lafortune", "default (one mirror lobe)", {"type": "lafortune"}),
+        case("lafortune", "three lobes: mirror, off-specular, retro",
+             {"type": "lafortune", "diffuse_reflectance": 0.2,
+              "cx_0": -1.0, "cy_0": -1.0, "cz_0": 1.0, "exponent_0": 30.0,
+              "specular_reflectance_0": 0.3, "cx_1": -1.0, "cy_1": -1.0, "cz_1": 0.8,
+              "exponent_1": 10.0, "specular_reflectance_1": 0.2, "cx_2": 1.0, "cy_2": 1.0,
+              "cz_2": 1.0, "exponent_2": 5.0, "specular_reflectance_2": 0.2}),
     ]
 
 
