@@ -50,6 +50,19 @@ def terms(ctx: Context, s: Section) -> tuple[str, float]:
             rows.append((kind, label, f"{worst_ndf:.1e}", f"{worst_weak:.1e}"))
             if masking == "smith_mitsuba":
                 rational = max(rational, worst_weak)
+        # the float64 reference's terms, the same integrals
+        for masking, label in (("smith", "Smith, exact"), ("vcavity", "V-cavity")):
+            for alpha in ctx.n((0.1, 0.5, 1.0), (0.1, 1.0)):
+                D = (lambda a: lambda m: ref.ndf(kind, a, m))(alpha)
+                G1 = ref.vcavity_g1 if masking == "vcavity" else \
+                    (lambda a: lambda v, m: ref.smith_g1(kind, a, v, m))(alpha)
+                s.rows += [Row.of(f"cooktorrance reference terms {kind}",
+                                  checks.check_ndf(D, alpha, f"{kind} α={alpha:g} float64"),
+                                  f"∫ D cos = 1, α = {alpha:g}"),
+                           Row.of(f"cooktorrance reference terms {kind}",
+                                  checks.check_weak_furnace(D, G1, alpha,
+                                                            f"{kind} {label} α={alpha:g} float64"),
+                                  f"weak furnace, {label}, α = {alpha:g}")]
     return md_table(["distribution", "masking", "worst |∫ D cos − 1|",
                      "worst |weak furnace − 1| (θo ≤ 84°)"], rows), rational
 
@@ -160,6 +173,12 @@ def g_difference_figure(ctx: Context) -> tuple[str, list]:
     return save_figure(fig, ctx.figure("ct_g_difference.png")), rows
 
 
+#: The white-furnace cases besides the plotted grid (distribution, masking, visible normals, α).
+FURNACE_EXTRA = [(kind, shadowing, False, 0.5) for kind in KINDS
+                 for shadowing in ("vcavity", "smith")] + [(kind, "vcavity", True, 0.02)
+                                                          for kind in KINDS]
+
+
 def furnace_grid(ctx: Context, s: Section) -> tuple[str, str]:
     """F ≡ 1: albedo ≤ 1 and equal to the float64 reference, for both G and both D."""
     plt = pyplot()
@@ -192,6 +211,23 @@ def furnace_grid(ctx: Context, s: Section) -> tuple[str, str]:
         ax.set_xlabel("incident angle θ (degrees)")
         ax.axhline(1, color="0.5", lw=0.8, ls=":")
         ax.grid(alpha=0.3)
+    # Not plotted: the D·cos sampler (both distributions, both masking functions; unbiased for
+    # Beckmann + Smith too, which weighs only the visible normals with the rational G1) and a
+    # sharp lobe (α = 0.02) with the V-cavity's visible normals, for both distributions
+    for kind, shadowing, visible, alpha in FURNACE_EXTRA:
+        sp = ct(distribution=kind, shadowing=shadowing, alpha=alpha, fresnel="none",
+                sample_visible=visible)
+        curve = checks.albedo_curve(sp, thetas, n=ctx.n(400_000, 50_000),
+                                    estimators=("reference",))
+        sampler = "VNDF" if visible else "D cos"
+        label = f"cooktorrance {kind} {shadowing} {sampler}"
+        s.rows.append(Row.of(label, checks.check_energy(sp, curve=curve),
+                             f"F ≡ 1, α = {alpha:g}: E(θ) ≤ 1"))
+        s.rows.append(Row.of(label, checks.check_albedo_agreement(sp, curve=curve, rtol=1e-3),
+                             f"F ≡ 1, α = {alpha:g}: E(θ) = reference"))
+        rows.append((kind, f"{shadowing}, {sampler}", f"{alpha:g}",
+                     f"{curve.reference[0, 0]:.4f}", f"{curve.sampled[0, 0]:.4f}",
+                     f"{curve.reference[-1, 0]:.4f}", f"{curve.sampled[-1, 0]:.4f}"))
     axes[0].set_ylabel("directional albedo, F ≡ 1")
     axes[1].legend(fontsize=7, ncol=2)
     fig_path = save_figure(fig, ctx.figure("ct_furnace_albedo.png"))
@@ -215,19 +251,25 @@ def smooth_limit(ctx: Context, s: Section) -> str:
             for alpha in (1e-2, 1e-3, 1e-4):
                 e, _ = checks.albedo_sampled(ct(alpha=alpha, **ours), t, n=ctx.n(200_000, 20_000))
                 cells.append(f"{e.mean():.5f}")
-            dev = abs(float(cells[-1]) - fresnel.mean())
-            s.rows.append(Row(f"cooktorrance ({label})", f"α = 1e-4 albedo = smooth Fresnel, "
-                              f"θ = {theta:g}°", f"|Δ| {dev:.1e}", "≤ 1e-3", dev <= 1e-3))
+            # α = 1e-4 with the D·cos sampler as well
+            e, _ = checks.albedo_sampled(ct(alpha=1e-4, sample_visible=False, **ours), t,
+                                         n=ctx.n(200_000, 20_000))
+            cells.append(f"{e.mean():.5f}")
+            for sampler, value in (("VNDF", cells[-2]), ("D cos", cells[-1])):
+                dev = abs(float(value) - fresnel.mean())
+                s.rows.append(Row(f"cooktorrance ({label})", f"α = 1e-4 albedo ({sampler}) = "
+                                  f"smooth Fresnel, θ = {theta:g}°", f"|Δ| {dev:.1e}", "≤ 1e-3",
+                                  dev <= 1e-3))
             rows.append(cells)
-    return md_table(["material", "θ", "smooth built-in: F", "α = 1e-2", "α = 1e-3", "α = 1e-4"],
-                    rows)
+    return md_table(["material", "θ", "smooth built-in: F", "α = 1e-2", "α = 1e-3", "α = 1e-4",
+                     "α = 1e-4, D cos"], rows)
 
 
 def sampling_grid(ctx: Context, s: Section) -> str:
     alphas = ctx.n((0.02, 0.1, 0.5, 1.0), (0.1,))
     thetas = (0.0, 84.26)
     configs = [(k, sh, v) for k in KINDS for sh in ("vcavity", "smith") for v in (True, False)]
-    tests = len(configs) * len(alphas) * len(thetas) + 2
+    tests = len(configs) * len(alphas) * len(thetas) + 3
     rows = []
     for kind, shadowing, visible in configs:
         worst, fails = 1.0, 0
@@ -246,11 +288,12 @@ def sampling_grid(ctx: Context, s: Section) -> str:
                                            sample_visible=visible), n=ctx.n(100_000, 20_000))
         s.rows.append(Row.of(f"cooktorrance {kind} {shadowing} {sampler}", cons))
         rows.append((kind, shadowing, sampler, f"{worst:.3g}", f"{cons.value:.2g}"))
-    for theta in thetas:  # with the diffuse base lobe
-        r = checks.chi2_bsdf(ct(alpha=0.2, diffuse_reflectance=0.5, eta=1.5),
-                             wi=batch.direction(math.radians(theta)), res=None, ires=None,
-                             test_count=tests)
-        s.rows.append(Row.of("cooktorrance + diffuse base", r, f"χ², θ = {theta:g}°"))
+    # with the diffuse base lobe: at normal incidence, oblique (off the x axis) and grazing
+    for label, wi in (("θ = 0°", batch.direction(0.0)), ("ωi = (0.5, 0.2, 0.84)", [0.5, 0.2, 0.84]),
+                      (f"θ = {thetas[-1]:g}°", batch.direction(math.radians(thetas[-1])))):
+        r = checks.chi2_bsdf(ct(alpha=0.2, diffuse_reflectance=0.5, eta=1.5), wi=wi, res=None,
+                             ires=None, test_count=tests)
+        s.rows.append(Row.of("cooktorrance + diffuse base", r, f"χ², {label}"))
     return md_table(["distribution", "masking", "sampling", "smallest χ² p-value",
                      "consistency (max rel. error)"], rows)
 
@@ -276,17 +319,36 @@ def stability(ctx: Context, s: Section) -> str:
         grid += checks.parameter_grid(ct(eta=eta, k=k), alpha=list(alphas),
                                       fresnel=["exact", "schlick"], **options)
     grid += checks.parameter_grid(ct(diffuse_reflectance=0.5, material="Au"), alpha=list(alphas),
-                                  **options)
+                                  fresnel=["exact", "schlick"], **options)
     r = checks.check_stability(grid, n_random=ctx.n(2_000, 200))
     s.rows.append(Row.of("cooktorrance", r, f"stability over {len(grid)} parameter sets"))
     return (f"{len(grid)} parameter sets: α ∈ {{{', '.join(f'{a:g}' for a in alphas)}}} × "
             f"(η, k) ∈ {{{', '.join(f'({e:.7g}, {k:g})' for e, k in iors)}}} × both "
             "distributions × both masking functions × both samplers × exact and Schlick "
-            "Fresnel, and the diffuse base (gold) over α and the rest")
+            "Fresnel, and the diffuse base (gold) over α and the rest, both Fresnel terms")
 
 
 #: The incident angles of the energy table (84.26°: cosθ = 0.1).
 ENERGY_THETAS = (0.0, 45.0, 70.0, 84.26, 89.0)
+
+
+#: The grid on which the float64 reference's albedo (F ≡ 1) must stay ≤ 1.
+REFERENCE_ALPHAS = (1e-3, 0.1, 0.5, 2.0, 10.0)
+REFERENCE_THETAS = (0.0, 30.0, 60.0, 80.0, 89.0, 89.9)
+
+
+def reference_energy(s: Section) -> None:
+    """The float64 model conserves energy (F ≡ 1) over α ∈ [1e-3, 10] and θ ∈ [0, 89.9°]."""
+    for kind in KINDS:
+        for shadowing in ("vcavity", "smith"):
+            worst = 0.0
+            for alpha in REFERENCE_ALPHAS:
+                model = ref.CookTorrance(alpha, kind, shadowing, fresnel="none")
+                for theta in REFERENCE_THETAS:
+                    worst = max(worst, float(model.albedo(math.radians(theta), 96, 256)[0]))
+            s.rows.append(Row(f"cooktorrance reference {kind} {shadowing}", "float64 albedo "
+                              f"(F ≡ 1) ≤ 1 over α ∈ [1e-3, 10], θ ∈ [0°, 89.9°]",
+                              f"max {worst:.6f}", "≤ 1 + 1e-5", worst <= 1 + 1e-5))
 
 
 def energy_table() -> str:
@@ -327,6 +389,7 @@ def section(ctx: Context) -> Section:
     t_limit = smooth_limit(ctx, s)
     t_sampling = sampling_grid(ctx, s)
     t_energy = energy_table()
+    reference_energy(s)
     grid = stability(ctx, s)
     scalar_pass(ctx, s)
     s.markdown = "\n".join([

@@ -19,6 +19,31 @@ CHI2_WI = (("outside 45°", [0.5, 0.3, 0.81]), ("outside grazing", [0.8, 0.3, 0.
            ("inside", [0.2, -0.6, -0.5]), ("inside, TIR", [0.8, 0.3, -0.05]))
 
 
+#: The cases of Mitsuba's own roughdielectric χ² tests (and one of ours): params, ωi, the
+#: component sampled alone (None: both lobes).
+UPSTREAM_CHI2 = {
+    "grazing": ({"alpha": 0.5}, [0.8, 0.3, 0.05], None),
+    "beckmann-all-normals": ({"alpha": 0.5, "sample_visible": False}, [0.5, 0.0, 0.5], None),
+    "beckmann-visible": ({"alpha": 0.5}, [0.5, 0.0, 0.5], None),
+    "ggx-all-normals": ({"alpha": 0.5, "sample_visible": False, "distribution": "ggx"},
+                        [0.5, 0.0, 0.5], None),
+    "ggx-visible-grazing": ({"alpha": 0.5, "distribution": "ggx"}, [0.5, 0.5, 0.001], None),
+    "from-inside": ({"alpha": 0.5}, [0.2, -0.6, -0.5], None),
+    "from-inside-tir": ({"alpha": 0.5}, [0.8, 0.3, -0.05], None),
+    # (not upstream) D·cos normals from inside: some face away from ωi and must be no sample
+    "from-inside-all-normals": ({"alpha": 0.3, "sample_visible": False, "distribution": "ggx"},
+                                [0.2, -0.6, -0.5], None),
+    "from-the-denser-side": ({"alpha": 0.5, "int_ior": 1.0, "ext_ior": 1.5}, [0.2, -0.6, 0.5],
+                             None),
+    "reflection-lobe-aniso": ({"alpha_u": 0.5, "alpha_v": 0.2}, [-0.5, -0.5, 0.1], 0),
+    "transmission-lobe-aniso": ({"alpha_u": 0.5, "alpha_v": 0.2}, [-0.5, -0.5, 0.1], 1),
+}
+
+#: The stability grid: α and η from index matching to far from it, on both sides of 1.
+STABILITY_ALPHAS = (1e-4, 1e-3, 0.3, 1.0, 10.0)
+STABILITY_ETAS = (1.0 + 1e-5, 1.0 - 1e-5, 1.5, 0.5, 1e3, 1e-3)
+
+
 def glass(**params) -> dict:
     return ct(transmission=True, **params)
 
@@ -59,7 +84,7 @@ def rendered(ctx: Context, s: Section) -> str:
 def smooth_limit(ctx: Context, s: Section) -> tuple[str, str]:
     """α → 0: reflected and transmitted fractions against the smooth dielectric's, both sides."""
     plt = pyplot()
-    thetas = ctx.n((0.0, 30.0, 60.0, 80.0, 100.0, 120.0, 136.0, 140.0, 150.0, 170.0),
+    thetas = ctx.n((0.0, 30.0, 40.0, 60.0, 80.0, 100.0, 120.0, 136.0, 140.0, 150.0, 170.0),
                    (0.0, 80.0, 136.0, 170.0))
     smooth = {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0}
     n = ctx.n(200_000, 20_000)
@@ -101,10 +126,11 @@ def smooth_limit(ctx: Context, s: Section) -> tuple[str, str]:
 
 
 def energy(ctx: Context, s: Section) -> str:
-    thetas = ctx.n((0.0, 45.0, 70.0, 85.0, 95.0, 110.0, 135.0, 160.0), (0.0, 85.0, 135.0))
+    thetas = ctx.n((0.0, 45.0, 70.0, 80.0, 85.0, 95.0, 100.0, 110.0, 135.0, 160.0, 170.0),
+                   (0.0, 85.0, 135.0))
     rows = []
     for kind in KINDS:
-        for alpha in ctx.n((0.1, 0.5), (0.5,)):
+        for alpha in ctx.n((0.1, 0.3, 0.5), (0.5,)):
             sp = glass(alpha=alpha, eta=1.5, distribution=kind)
             curve = checks.albedo_curve(sp, thetas, n=ctx.n(400_000, 50_000),
                                         estimators=("reference",))
@@ -153,8 +179,39 @@ def sampling(ctx: Context, s: Section) -> str:
                                               sample_visible=visible), n=ctx.n(100_000, 20_000))
         s.rows.append(Row.of(f"cooktorrance transmission {kind} {sampler}", cons))
         rows.append((kind, sampler, f"{worst:.3g}", f"{cons.value:.2g}"))
+    # the configurations of Mitsuba's own roughdielectric χ² tests
+    tests, worst, failed = len(UPSTREAM_CHI2), 1.0, []
+    for name, (params, wi, component) in UPSTREAM_CHI2.items():
+        bctx = None
+        if component is not None:
+            bctx = mi.BSDFContext()
+            bctx.component = component
+        r = checks.chi2_bsdf(glass(**params), wi=wi, ctx=bctx, res=None, ires=None,
+                             test_count=tests, sample_count=ctx.n(1_000_000, 200_000))
+        worst = min(worst, r.value)
+        if not r.passed:
+            failed.append(name)
+    s.rows.append(Row("cooktorrance transmission", "χ², the cases of Mitsuba's roughdielectric "
+                      "tests (" + ", ".join(UPSTREAM_CHI2) + ")", f"min p = {worst:.3g}"
+                      + (f" (rejected: {', '.join(failed)})" if failed else ""),
+                      f"Šidák over {tests}", not failed))
+    rows.append(("Mitsuba's cases", "both", f"{worst:.3g}", "—"))
     return md_table(["distribution", "sampling", "smallest χ² p-value",
                      "consistency (max rel. error)"], rows)
+
+
+def stability(ctx: Context, s: Section) -> str:
+    """No NaN, Inf or negative value over α × η × both distributions × both samplers, at the
+    stress directions of check_stability (both sides, grazing, total internal reflection)."""
+    alphas = ctx.n(STABILITY_ALPHAS, (1e-4, 10.0))
+    etas = ctx.n(STABILITY_ETAS, (1.0 + 1e-5, 1e3))
+    grid = checks.parameter_grid(glass(), alpha=list(alphas), eta=list(etas),
+                                 distribution=list(KINDS), sample_visible=[True, False])
+    r = checks.check_stability(grid, n_random=ctx.n(2_000, 200))
+    s.rows.append(Row.of("cooktorrance transmission", r,
+                         f"stability over {len(grid)} parameter sets"))
+    return (f"{len(grid)} parameter sets: α ∈ {{{', '.join(f'{a:g}' for a in alphas)}}} × η ∈ "
+            f"{{{', '.join(f'{e:.6g}' for e in etas)}}} × both distributions × both samplers")
 
 
 def section(ctx: Context) -> Section:
@@ -165,6 +222,7 @@ def section(ctx: Context) -> Section:
     t_energy = energy(ctx, s)
     t_furnace = furnace(ctx, s)
     t_sampling = sampling(ctx, s)
+    grid = stability(ctx, s)
     s.markdown = "\n".join([
         "`cooktorrance` with `transmission=true`: the reflection and refraction lobes of Walter "
         "et al. 2007, lit from either side.", "",
@@ -178,6 +236,10 @@ def section(ctx: Context) -> Section:
         "**Energy** (importance transport, where E(θ) ≤ 1 is energy conservation; θ > 90° lights "
         "the surface from inside): the float64 reference against `sample()`:", "", t_energy, "",
         "**White furnace**: " + t_furnace, "",
-        "**Sampling and consistency** (χ² over the whole sphere, α = 0.3, η = bk7/air):", "",
-        t_sampling])
+        "**Sampling and consistency** (χ² over the whole sphere, α = 0.3, η = bk7/air; then "
+        "the configurations of Mitsuba's own roughdielectric χ² tests):", "",
+        t_sampling, "",
+        f"**Stability**: no NaN, Inf or negative value over {grid}, at the stress directions "
+        "of `check_stability` (from both sides, grazing, beyond the critical angle) and random "
+        "ones."])
     return s

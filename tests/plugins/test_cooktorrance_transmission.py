@@ -17,6 +17,7 @@ from test_cooktorrance import assert_rel, small
 
 import mi_brdfs
 from mi_brdfs import checks
+from mi_brdfs.campaign.transmission import UPSTREAM_CHI2
 from mi_brdfs.reference import for_spec
 
 CT = "cooktorrance"
@@ -37,14 +38,21 @@ def _rel_tol() -> float:
     return 1e-4 if mi.variant().startswith("scalar") else 1e-5
 
 
-@pytest.mark.parametrize("visible", [True, False], ids=["visible", "all-normals"])
-@pytest.mark.parametrize("distribution", ["beckmann", "ggx"])
-@pytest.mark.parametrize("alpha", [{"alpha": 0.3}, {"alpha_u": 0.1, "alpha_v": 0.4}],
-                         ids=["iso", "aniso"])
-def test01_equals_roughdielectric(variants_all, np_rng, visible, distribution, alpha):
+#: Each distribution with each sampler, isotropic and anisotropic roughness alternating (the
+#: isotropic product, 2e5 pairs, runs in ``make validate``, section transmission)
+EQUAL_CASES = [("beckmann", True, "iso"), ("beckmann", False, "aniso"), ("ggx", True, "aniso"),
+               ("ggx", False, "iso")]
+ALPHAS = {"iso": {"alpha": 0.3}, "aniso": {"alpha_u": 0.1, "alpha_v": 0.4}}
+
+
+@pytest.mark.parametrize("distribution,visible,roughness", EQUAL_CASES,
+                         ids=[f"{r}-{d}-{'visible' if v else 'all-normals'}"
+                              for d, v, r in EQUAL_CASES])
+def test01_equals_roughdielectric(variants_all, np_rng, distribution, visible, roughness):
     """eval, pdf and eval_pdf of both lobes, ωi and ωo over the whole sphere (from outside and
     inside), in radiance and importance transport, equal roughdielectric's pointwise (1e-5
     relative in JIT variants); the reflection-only model differs."""
+    alpha = ALPHAS[roughness]
     common = dict(alpha, distribution=distribution, sample_visible=visible, int_ior=1.5,
                   ext_ior=1.0)
     ours, theirs = mi.load_dict(glass(**common)), mi.load_dict(rough_dielectric(**common))
@@ -62,15 +70,17 @@ def test01_equals_roughdielectric(variants_all, np_rng, visible, distribution, a
         assert_rel(eval_pdf(reflection_only, wi, wo)[0], b[0], 1e-3, floor=1e-6)
 
 
-@pytest.mark.parametrize("distribution", ["beckmann", "ggx"])
-@pytest.mark.parametrize("mode", [RADIANCE, IMPORTANCE], ids=["radiance", "importance"])
+@pytest.mark.parametrize("distribution,mode", [("beckmann", RADIANCE), ("ggx", IMPORTANCE)],
+                         ids=["beckmann-radiance", "ggx-importance"])
 def test02_samples_equal_roughdielectrics(variant_llvm_ad_rgb, np_rng, distribution, mode):
     """
     Visible normals, the same random numbers: the same bs.wo bit for bit, the same lobe
     (chosen with probability F), bs.eta and sampled type, and the weight to 1e-5, wherever
     roughdielectric's weight is not 0 (where it is, the sample failed and its other fields are
     undefined). Our bs.pdf equals roughdielectric's pdf() at bs.wo to 1e-5; its own bs.pdf,
-    taken at the sampled normal rather than at bs.wo, departs from that by up to 1e-3.
+    taken at the sampled normal rather than at bs.wo, departs from that by up to 1e-3. Each
+    distribution and each transport mode once (the sampler does not depend on the mode; the
+    weight of a refraction does).
     """
     common = dict(distribution=distribution, alpha_u=0.2, alpha_v=0.4, int_ior="bk7")
     ours, theirs = mi.load_dict(glass(**common)), mi.load_dict(rough_dielectric(**common))
@@ -155,13 +165,14 @@ def _albedo(spec, theta_deg, mask=None, n=200_000):
     return float(checks.albedo_sampled(spec, math.radians(theta_deg), n=n, ctx=ctx)[0][0])
 
 
-@pytest.mark.parametrize("theta", [0.0, 40.0, 80.0, 120.0, 136.0, 140.0, 170.0])
+@pytest.mark.parametrize("theta", [0.0, 80.0, 136.0, 140.0])
 def test05_smooth_limit_is_dielectric(variant_llvm_ad_rgb, theta):
     """
     As α → 0 (1e-4) the reflected and the transmitted fractions tend to the smooth dielectric's
     F and 1 − F, from outside (θ < 90°) and inside (θ > 90°: 180° − θ from the inner normal),
-    on both sides of the critical angle (41.8° for η = 1.5: θ = 136° and 120° lie beyond it,
-    where all is reflected, 140° and 170° within); within 1e-3.
+    on both sides of the critical angle (41.8° for η = 1.5: θ = 136° lies just beyond it,
+    where all is reflected, 140° just within); within 1e-3. The curve over θ (0° to 170°, 11
+    angles) runs in ``make validate``, section transmission.
     """
     ours, smooth = glass(alpha=1e-4, eta=1.5), {"type": "dielectric", "int_ior": 1.5,
                                                  "ext_ior": 1.0}
@@ -169,7 +180,7 @@ def test05_smooth_limit_is_dielectric(variant_llvm_ad_rgb, theta):
     for mask in (reflection, transmission):
         a, b = _albedo(ours, theta, mask), _albedo(smooth, theta, mask)
         assert abs(a - b) <= 1e-3, (mask, a, b)
-    if theta in (120.0, 136.0):  # total internal reflection
+    if theta == 136.0:  # total internal reflection
         assert _albedo(ours, theta, transmission) == 0.0
 
 
@@ -179,9 +190,12 @@ def test06_energy_and_the_reference_albedo(variant_llvm_ad_rgb, distribution):
     In importance transport (the energy) the albedo from sample() is ≤ 1 from both sides and
     equals the float64 reference (GGX 1e-3; Beckmann within the 3e-3 bias of the rational G1
     that weights exact visible normals, as roughconductor's); the reference itself stays ≤ 1.
+    From outside at normal and grazing incidence, from inside beyond the critical angle and
+    near the normal; the curve over 11 angles, for α ∈ {0.1, 0.3, 0.5}, runs in ``make
+    validate``, section transmission.
     """
     spec = glass(alpha=0.3, eta=1.5, distribution=distribution)
-    thetas = (0.0, 45.0, 80.0, 100.0, 135.0, 170.0)
+    thetas = (0.0, 80.0, 100.0, 170.0)
     curve = checks.albedo_curve(spec, thetas, n=400_000, estimators=("reference",))
     assert checks.check_energy(spec, curve=curve).passed
     rtol = 1e-3 if distribution == "ggx" else 3e-3
@@ -217,7 +231,9 @@ def test08_furnace(variant_llvm_ad_rgb):
 
 def test09_furnace_check_rejects_a_wrong_reflection(variant_llvm_ad_rgb):
     """check_furnace can fail for a transmitting BSDF: a glass whose reflection sample weights
-    are doubled while its eval() is right (the prediction comes from eval())."""
+    are doubled while its eval() is right (the prediction comes from eval(), without a float64
+    reference for the wrapper: 5e4 directions per angle, |Δ| 0.016 against the tolerance
+    0.005), while the same wrapper passing every call through unchanged passes (|Δ| 7e-4)."""
     from broken import register_wrapper
 
     def doubled(inner, ctx, si, s1, s2, active):
@@ -226,36 +242,29 @@ def test09_furnace_check_rejects_a_wrong_reflection(variant_llvm_ad_rgb):
 
     spec = register_wrapper("test_doubled_reflection", mi.load_dict(glass(alpha=0.3, eta=1.5)),
                             sample=doubled)
-    result = checks.check_furnace(spec, spp=64, res=32)
+    result = checks.check_furnace(spec, spp=64, res=32, n=50_000)
     assert not result.passed, result.message
+    same = register_wrapper("test_passed_through", mi.load_dict(glass(alpha=0.3, eta=1.5)))
+    result = checks.check_furnace(same, spp=64, res=32, n=50_000)
+    assert result.passed, result.message
 
 
 # -- the cases of Mitsuba's own roughdielectric tests, run on cooktorrance --------------------
 
-UPSTREAM_CHI2 = {
-    "grazing": ({"alpha": 0.5}, [0.8, 0.3, 0.05], None),
-    "beckmann-all-normals": ({"alpha": 0.5, "sample_visible": False}, [0.5, 0.0, 0.5], None),
-    "beckmann-visible": ({"alpha": 0.5}, [0.5, 0.0, 0.5], None),
-    "ggx-all-normals": ({"alpha": 0.5, "sample_visible": False, "distribution": "ggx"},
-                        [0.5, 0.0, 0.5], None),
-    "ggx-visible-grazing": ({"alpha": 0.5, "distribution": "ggx"}, [0.5, 0.5, 0.001], None),
-    "from-inside": ({"alpha": 0.5}, [0.2, -0.6, -0.5], None),
-    "from-inside-tir": ({"alpha": 0.5}, [0.8, 0.3, -0.05], None),
-    # (not upstream) D·cos normals from inside: some face away from ωi and must be no sample
-    "from-inside-all-normals": ({"alpha": 0.3, "sample_visible": False, "distribution": "ggx"},
-                                [0.2, -0.6, -0.5], None),
-    "from-the-denser-side": ({"alpha": 0.5, "int_ior": 1.0, "ext_ior": 1.5}, [0.2, -0.6, 0.5],
-                             None),
-    "reflection-lobe-aniso": ({"alpha_u": 0.5, "alpha_v": 0.2}, [-0.5, -0.5, 0.1], 0),
-    "transmission-lobe-aniso": ({"alpha_u": 0.5, "alpha_v": 0.2}, [-0.5, -0.5, 0.1], 1),
-}
+#: Both distributions with both samplers, from outside (grazing), from inside (beyond the
+#: critical angle too), from the denser side, and each lobe alone
+UPSTREAM_CASES = ["beckmann-all-normals", "ggx-visible-grazing", "from-inside-tir",
+                  "from-inside-all-normals", "from-the-denser-side", "reflection-lobe-aniso",
+                  "transmission-lobe-aniso"]
 
 
-@pytest.mark.parametrize("name", UPSTREAM_CHI2)
+@pytest.mark.parametrize("name", UPSTREAM_CASES)
 def test10_chi2_upstream_cases(variant_llvm_ad_rgb, name):
     """sample() against pdf() over the whole sphere in the configurations of Mitsuba's
-    roughdielectric χ² tests (grazing, from inside, total internal reflection, from the denser
-    side, each lobe alone through ctx.component), Šidák-corrected over the set."""
+    roughdielectric χ² tests (``campaign.transmission.UPSTREAM_CHI2``: grazing, from inside,
+    total internal reflection, from the denser side, each lobe alone through ctx.component),
+    Šidák-corrected over the set. A path-complete subset; ``make validate`` (section
+    transmission) runs every case at 1e6 samples."""
     params, wi, component = UPSTREAM_CHI2[name]
     ctx = None
     if component is not None:
@@ -364,10 +373,15 @@ def test16_flags_and_components_are_roughdielectrics(variants_rgb):
 
 
 def test17_stability(variants_rgb):
-    """No NaN/Inf/negative at the stress directions (both sides, grazing, TIR) over α, η close
-    to 1 and far from it, both distributions and samplers."""
-    grid = checks.parameter_grid(glass(), alpha=[1e-4, 0.3, 10.0], eta=[1.0 + 1e-5, 1.5, 0.5, 1e3],
-                                 distribution=["beckmann", "ggx"], sample_visible=[True, False])
+    """No NaN/Inf/negative at the stress directions (both sides, grazing, TIR) at the extremes
+    of α (1e-4, 10) and η (close to 1, 0.5, 1e3), each on two of the four paths (distribution ×
+    sampler) in turn, every path seeing both extremes of α; α × η × both distributions × both
+    samplers runs in ``make validate``, section transmission."""
+    extremes = [(1e-4, 1.0 + 1e-5), (10.0, 1e3), (1e-4, 0.5), (10.0, 1.0 + 1e-5),
+                (1e-4, 1e3), (10.0, 0.5), (0.3, 1.5), (0.3, 1e3)]
+    paths = [(d, v) for d in ("beckmann", "ggx") for v in (True, False)]
+    grid = [glass(alpha=a, eta=eta, distribution=d, sample_visible=v)
+            for i, (a, eta) in enumerate(extremes) for d, v in (paths[i % 4], paths[(i + 1) % 4])]
     result = checks.check_stability(grid, n_random=small(2000) // 4)
     assert result.passed, result.message
     assert not any(row.rejected for row in result.details["rows"])

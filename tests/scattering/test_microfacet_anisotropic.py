@@ -79,27 +79,29 @@ def test03_anisotropy_is_seen(variant_llvm_ad_rgb, kind):
     assert distribution(kind, _alpha((0.2, 0.2))).ndf(m)[0] == isotropic
 
 
-@pytest.mark.parametrize("kind", KINDS)
-@pytest.mark.parametrize("pair", [(0.05, 0.5), (1.0, 0.1)])
+@pytest.mark.parametrize("kind,pair", [("beckmann", (0.1, 1.0)), ("ggx", (1.0, 0.1))])
 def test04_ndf_normalised_and_weak_white_furnace(variant_llvm_ad_rgb, kind, pair):
-    """∫ D cosθ dω = 1 and the weak white furnace = 1 within 1e-3 in the azimuths 0°, 45°, 90°,
-    exact Smith and V-cavity masking, float32 terms and the float64 reference."""
+    """∫ D cosθ dω = 1 and the weak white furnace = 1 within 1e-3, exact Smith and V-cavity
+    masking, float32 terms and the float64 reference, αu/αv = 1:10 and 10:1, the azimuth of ωo
+    taking 0°, 45° and 90° in turn. Each (distribution, pair, masking, terms) in every
+    azimuth, for four pairs down to α = 0.05 (a finer quadrature: NumPy's Gauss-Legendre
+    nodes for it cost seconds), runs in ``make validate``, section anisotropy."""
     D64 = lambda m: ref.ndf(kind, pair, m)
     masks = {"smith": lambda v, m: ref.smith_g1(kind, pair, v, m), "vcavity": ref.vcavity_g1}
+    phis = iter((0.0, 45.0, 90.0, 45.0))
     for masking in ("smith", "vcavity"):
         D, G1 = checks.package_terms(kind, pair, masking)
         for d, g1, what in ((D, G1, "float32"), (D64, masks[masking], "float64")):
             label = f"{kind} α={pair} {masking} {what}"
             assert checks.check_ndf(d, pair, label).passed
-            for phi in (0.0, 45.0, 90.0):
-                result = checks.check_weak_furnace(d, g1, pair, label, phi_deg=phi)
-                assert result.passed, result.message
+            result = checks.check_weak_furnace(d, g1, pair, label, phi_deg=next(phis))
+            assert result.passed, result.message
 
 
 def test05_weak_furnace_rejects_a_mismatched_masking(variant_llvm_ad_rgb):
     """The furnace can fail here: Smith's G1 of the swapped pair (αv, αu) with D of (αu, αv)
     leaves the visible normals unnormalised at grazing angles."""
-    pair = (0.05, 0.5)
+    pair = (0.1, 1.0)
     D = lambda m: ref.ndf("ggx", pair, m)
     G1 = lambda v, m: ref.smith_g1("ggx", pair[::-1], v, m)
     result = checks.check_weak_furnace(D, G1, pair, "mismatched", phi_deg=0.0)

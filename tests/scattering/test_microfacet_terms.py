@@ -104,13 +104,14 @@ def test04_vcavity_g_is_the_textbook_form(variant_llvm_ad_rgb, np_rng):
     assert g.min() >= 0 and g.max() <= 1 and (g[wo[:, 2] < 0] == 0).all()
 
 
-@pytest.mark.parametrize("kind", KINDS)
-@pytest.mark.parametrize("alpha", [0.1, 0.5, 1.0])
+@pytest.mark.parametrize("kind,alpha", [("beckmann", 0.1), ("ggx", 0.1), ("ggx", 0.5),
+                                        ("beckmann", 1.0)])
 def test05_ndf_normalised_and_weak_white_furnace(variant_llvm_ad_rgb, kind, alpha):
     """
     ∫ D cosθ dω = 1 and Heitz's weak white furnace = 1 within 1e-3 for both distributions and
     both masking functions (exact Smith, V-cavity), in float32 (the package's terms) and float64
-    (the reference).
+    (the reference). Each distribution at the narrowest α and one rougher; both at every α of
+    {0.1, 0.5, 1}, in both precisions, run in ``make validate``, section cooktorrance.
     """
     D64 = lambda m: ref.ndf(kind, alpha, m)
     masks = {"smith": lambda v, m: ref.smith_g1(kind, alpha, v, m), "vcavity": ref.vcavity_g1}
