@@ -4,8 +4,14 @@ wheel): each sets its variant, registers the plugins there, and yields the varia
 LLVM variants are skipped, with the reason, where no working libLLVM is installed.
 """
 
-import numpy as np
-import pytest
+import os
+
+# One BLAS thread per test process: make test runs one process per core, and NumPy's threaded
+# BLAS would compete with drjit's thread pool for the same cores (set before NumPy loads).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 import mi_brdfs  # noqa: F401  (import first: it chooses the libLLVM before drjit loads)
 import drjit as dr
