@@ -201,31 +201,15 @@ class Phong(mi.BSDF):
     _enabled = lobes.two_lobes_enabled
     eval_diffuse_reflectance = lobes.two_lobes_diffuse_reflectance
 
-    def sample(self, ctx, si, sample1, sample2, active=True):
-        bs, sample2 = lobes.new_sample(), lobes.point2(sample2)
-        enabled = self._enabled(ctx)
-        if not (enabled[0] or enabled[1]):
-            return bs, mi.Spectrum(0.0)
-        active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
-        if lobes.none(active):
-            return bs, mi.Spectrum(0.0)
-        consts = self._lobe_constants(si, active) if enabled[1] else None
+    sample, eval_pdf = lobes.two_lobes_sample, lobes.two_lobes_eval_pdf
 
-        # ωo from the glossy lobe (cosⁿ about R, or H about N), or the cosine-weighted hemisphere;
-        # with both lobes on, sample1 picks one with probability p_glossy
-        def glossy():
-            return self._lobe_sample(si.wi, sample2, consts[1])
+    def _sample_glossy(self, si, sample2, consts):
+        """ωo from the glossy lobe: cosⁿ about R, or H about N."""
+        return self._lobe_sample(si.wi, sample2, consts[1])
 
-        lobes.glossy_or_diffuse(self, bs, sample1, sample2, self._p_glossy, enabled, glossy)
-        # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
-        value, bs.pdf = self._eval_pdf(ctx, si, bs.wo, active, enabled, consts)
-        return bs, lobes.weight(value, bs.pdf, active)
-
-    def eval_pdf(self, ctx, si, wo, active=True):
-        enabled = self._enabled(ctx)
-        if not (enabled[0] or enabled[1]):
-            return mi.Spectrum(0.0), mi.Float(0.0)
-        return self._eval_pdf(ctx, si, lobes.vector(wo), active, enabled)
+    def _glossy_probability(self, si):
+        """The probability of sampling the glossy lobe: constant per BSDF."""
+        return self._p_glossy
 
     def _eval_pdf(self, ctx, si, wo, active, enabled, consts=None):
         """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the ``enabled`` lobes
@@ -261,6 +245,8 @@ class Phong(mi.BSDF):
         if self._textured_exponent:
             return constants(self.m_form, self.m_lobe, self.m_exponent.eval_1(si, active))
         return self._constants
+
+    _glossy_params = _lobe_constants
 
     def parameters_changed(self, keys=()):
         """Precompute the lobe constants and the lobe choice probability."""

@@ -118,40 +118,15 @@ class Ward(mi.BSDF):
         self.parameters_changed()
 
     eval, pdf = lobes.eval_half, lobes.pdf_half
+    sample, eval_pdf = lobes.two_lobes_sample, lobes.two_lobes_eval_pdf
     _enabled = lobes.two_lobes_enabled
     eval_diffuse_reflectance = lobes.two_lobes_diffuse_reflectance
 
-    def sample(self, ctx, si, sample1, sample2, active=True):
-        bs, sample2 = lobes.new_sample(), lobes.point2(sample2)
-        enabled = self._enabled(ctx)
-        if not (enabled[0] or enabled[1]):
-            return bs, mi.Spectrum(0.0)
-        wi = si.wi
-        active = active & (wi.z > 0)  # one-sided: the local frame's z is cosθ
-        if lobes.none(active):
-            return bs, mi.Spectrum(0.0)
-        distr = self._distribution(si, active) if enabled[1] else None
-
-        # ωo: ωi reflected about a half vector of the Gaussian lobe, or the cosine-weighted
-        # hemisphere; with both lobes on, sample1 picks one with probability p_glossy
-        def glossy():
-            return vector.reflect(wi, terms.sample(distr, sample2))
-
-        lobes.glossy_or_diffuse(self, bs, sample1, sample2, self._p_glossy, enabled, glossy)
-        # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
-        value, bs.pdf = self._eval_pdf(si, wi, bs.wo, active, enabled, distr)
-        return bs, lobes.weight(value, bs.pdf, active)
-
-    def eval_pdf(self, ctx, si, wo, active=True):
-        enabled = self._enabled(ctx)
-        if not (enabled[0] or enabled[1]):
-            return mi.Spectrum(0.0), mi.Float(0.0)
-        return self._eval_pdf(si, si.wi, lobes.vector(wo), active, enabled)
-
-    def _eval_pdf(self, si, wi, wo, active, enabled, distr=None):
+    def _eval_pdf(self, ctx, si, wo, active, enabled, distr=None):
         """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the ``enabled`` lobes
         (diffuse, glossy)."""
         has_diffuse, has_glossy = enabled
+        wi = si.wi
         active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
         if has_diffuse:
             # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
@@ -175,6 +150,16 @@ class Ward(mi.BSDF):
         """The lobe's Beckmann distribution at ``si``, α clamped to 10⁻⁴."""
         return terms.distribution(*properties.roughness_at(self.m_alpha_u, self.m_alpha_v, si,
                                                            active))
+
+    _glossy_params = _distribution
+
+    def _sample_glossy(self, si, sample2, distr):
+        """ωi reflected about a half vector of the Gaussian lobe (Ward's 1992 recipe)."""
+        return vector.reflect(si.wi, terms.sample(distr, sample2))
+
+    def _glossy_probability(self, si):
+        """The probability of sampling the glossy lobe: constant per BSDF."""
+        return self._p_glossy
 
     def parameters_changed(self, keys=()):
         """The lobe choice probability."""
