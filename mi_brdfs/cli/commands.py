@@ -362,6 +362,25 @@ def cmd_bench(args) -> int:
     return 0  # a benchmark reports targets met or missed; it does not fail
 
 
+def cmd_tables(args) -> int:
+    from .. import albedo_tables as tables
+    from ..progress import Progress
+    from ..scattering.multiscatter import TABLE_PATH
+
+    _jit_variant("mi-brdfs tables")
+    out = args.out or TABLE_PATH
+    samples = args.samples or tables.SAMPLES
+    rows = len(tables.KINDS) * len(tables.SHADOWINGS) * tables.N_ALPHA
+    progress = Progress(rows, "albedo tables", unit="rows")
+    arrays = tables.build(samples=samples, progress=progress)
+    progress.close()
+    tables.write(out, arrays)
+    print(f"wrote {out}: E(mu, alpha) on {tables.N_MU} x {tables.N_ALPHA} nodes for "
+          f"{', '.join(k[2:] for k in arrays if k.startswith('E_') and 'avg' not in k)}, "
+          f"{samples} x {samples} samples per node")
+    return 0
+
+
 def cmd_info(args) -> int:
     import drjit as dr
     import mitsuba as mi

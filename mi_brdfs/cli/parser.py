@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .commands import (
     EXIT_USER_ERROR, cmd_audit, cmd_bench, cmd_check, cmd_compare, cmd_fit, cmd_furnace, cmd_info,
-    cmd_plot, cmd_render, cmd_simplify, cmd_validate,
+    cmd_plot, cmd_render, cmd_simplify, cmd_tables, cmd_validate,
 )
 
 
@@ -86,6 +86,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_validate(sub)
     _add_bench(sub)
     _add_audit(sub)
+    _add_tables(sub)
     _add_info(sub)
     return parser
 
@@ -350,6 +351,22 @@ def _add_audit(sub) -> None:
                     help="audit only these plugins (by name as in XML)")
     au.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     au.set_defaults(func=cmd_audit)
+
+
+def _add_tables(sub) -> None:
+    """``mi-brdfs tables``."""
+    t = sub.add_parser(
+        "tables", help="rebuild the albedo tables of cooktorrance's multiscatter",
+        description="Rebuild the directional albedo E(mu, alpha) of cooktorrance's "
+                    "single-scattering lobe (F = 1) for each distribution and masking, the "
+                    "tables of its energy compensation (multiscatter = true), from the plugin "
+                    "itself, deterministically (a few minutes).")
+    t.add_argument("-o", "--out", type=_output(".npz"), metavar="FILE.npz",
+                   help="where to write them (default: the package's own table file)")
+    t.add_argument("--samples", type=_number(int, "--samples", lambda v: v >= 4, "an integer "
+                                             ">= 4"), default=None, metavar="N",
+                   help="an N x N grid of samples per node (default: 128)")
+    t.set_defaults(func=cmd_tables)
 
 
 def _add_info(sub) -> None:

@@ -13,7 +13,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import ParameterError
-from ..scattering import microfacet
+from ..scattering import microfacet, multiscatter
 from . import lobes, properties
 from .cooktorrance_conductor import ConductorLobe
 from .cooktorrance_dielectric import DielectricLobe
@@ -203,6 +203,15 @@ class CookTorrance(mi.BSDF):
        - Sample the visible microfacet normals of the chosen ``shadowing`` (Heitz & d'Eon
          2014) instead of D(m)·cosθm (Walter et al. 2007) (Default: |true|)
 
+     * - multiscatter
+       - |bool|
+       - Add the energy compensation of Kulla & Conty 2017: a second, reciprocal lobe that
+         gives back the light the microfacet lobe loses to bounces between microfacets, so
+         that a white furnace reads 1 at every roughness and angle (F ≡ 1); coloured by
+         Kulla & Conty's F_ms with a Fresnel term. Reflection only (not with
+         ``transmission``); anisotropic surfaces use the tables of sqrt(αu·αv)
+         (Default: |false|: single scattering, and no cost)
+
      * - transmission
        - |bool|
        - Add the refraction lobe of Walter et al. 2007: a rough dielectric interface, lit
@@ -287,8 +296,22 @@ class CookTorrance(mi.BSDF):
     narrower than a χ² histogram resolves: there the plugin behaves as a smooth mirror whose
     albedo tends to F (tested). Single scattering loses energy at high α and grazing angles
     (the light that bounces between microfacets is missing: ``validation/REPORT.md`` gives
-    the white-furnace albedo); the diffuse base is added, not coupled, so ρd + E_spec ≤ 1 is
-    up to the user (ρd + ks > 1 warns, values kept).
+    the white-furnace albedo), unless ``multiscatter`` gives it back; the diffuse base is
+    added, not coupled, so ρd + E_spec ≤ 1 is up to the user (ρd + ks > 1 warns, values
+    kept).
+
+    **Energy compensation** (``multiscatter`` = |true|; Kulla & Conty 2017, after Kelemen &
+    Szirmay-Kalos 2001). A second lobe ks·F_ms·(1 − E(μi))(1 − E(μo))/(π (1 − E_avg)) adds the
+    light of the bounces between microfacets, with E(μ) the albedo of the lobe above with
+    F ≡ 1 at incidence cosine μ, E_avg = 2∫E(μ)μ dμ, and the Fresnel colour
+    F_ms = F_avg² E_avg/(1 − F_avg (1 − E_avg)), F_avg = 2∫F(μ)μ dμ (1 with ``fresnel`` =
+    ``none``, R0 + (1 − R0)/21 with ``schlick``). With F ≡ 1 the albedo is then 1 at every
+    angle, up to the interpolation of E. E comes from tables that ``mi-brdfs tables`` builds
+    from this lobe, per distribution and masking (64 μ × 128 α nodes, α up to 2; beyond,
+    the compensation falls short); the lobe is reciprocal. It is sampled from the
+    cosine-weighted hemisphere, chosen against the microfacet normals in proportion to the
+    two lobes' albedos at ωi. ``validation/REPORT.md`` compares it with the true multiple
+    scattering of Heitz et al. 2016.
 
     .. tabs::
         .. code-tab:: xml
@@ -322,6 +345,8 @@ class CookTorrance(mi.BSDF):
         self.m_fresnel = properties.choice(props, PLUGIN, "fresnel", "exact", FRESNEL)
         #: Sample visible normals (else D·cosθ).
         self.m_sample_visible = properties.boolean(props, PLUGIN, "sample_visible", True)
+        #: Kulla & Conty's energy compensation (reflection only).
+        self.m_multiscatter = properties.boolean(props, PLUGIN, "multiscatter", False)
         if self.m_transmission:
             self._read_transmission(props)
         else:
@@ -382,6 +407,10 @@ class CookTorrance(mi.BSDF):
                                  "must be \"smith\" with transmission = true: the V-cavity "
                                  "masking (Cook & Torrance 1982) is derived for light above the "
                                  "surface, and gives no masking for a refracted pair")
+        if self.m_multiscatter:
+            raise ParameterError(PLUGIN, "multiscatter", True,
+                                 "is not available with transmission = true yet (the "
+                                 "compensation is implemented for the reflection lobe only)")
         if self.m_fresnel != "exact":
             raise ParameterError(PLUGIN, "fresnel", self.m_fresnel,
                                  "must be \"exact\" with transmission = true (the refracted "
@@ -433,7 +462,13 @@ class CookTorrance(mi.BSDF):
             self._lobe = ConductorLobe(self.m_distribution, self.m_alpha_u, self.m_alpha_v,
                                        self.m_shadowing, self.m_fresnel, self.m_sample_visible,
                                        self.m_eta, self.m_k, self.m_specular_reflectance,
-                                       self.m_diffuse_reflectance)
+                                       self.m_diffuse_reflectance, self._table())
+
+    def _table(self):
+        """The albedo table of the energy compensation, or None without it."""
+        if not self.m_multiscatter:
+            return None
+        return multiscatter.Table(self.m_distribution, self.m_shadowing)
 
     def to_string(self):
         if self.m_transmission:
@@ -459,6 +494,7 @@ class CookTorrance(mi.BSDF):
                 f"  shadowing = {self.m_shadowing},\n"
                 f"  fresnel = {self.m_fresnel},\n"
                 f"  sample_visible = {str(self.m_sample_visible).lower()},\n"
+                f"  multiscatter = {str(self.m_multiscatter).lower()},\n"
                 f"{alpha}"
                 f"{ior}"
                 f"  specular_reflectance = {properties.indent(self.m_specular_reflectance)},\n"

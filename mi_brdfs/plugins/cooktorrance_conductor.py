@@ -13,7 +13,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from ..scattering import fresnel, microfacet, mixture, vector
+from ..scattering import fresnel, microfacet, mixture, multiscatter, vector
 from . import lobes, properties
 
 #: F of each ``fresnel`` setting, per spectrum (``none``: F ≡ 1, no term).
@@ -24,7 +24,8 @@ class ConductorLobe:
     """
     The microfacet reflection lobe and its diffuse base, for
     :class:`~mi_brdfs.plugins.cooktorrance.CookTorrance` to delegate to. Component 0 is the
-    microfacet lobe (as ``roughconductor``'s only one), component 1 the diffuse base.
+    microfacet lobe (as ``roughconductor``'s only one, with its energy compensation when there
+    is one), component 1 the diffuse base.
 
     Parameter ``kind`` (str): 'beckmann' or 'ggx'. Parameter ``alpha_u``, ``alpha_v``
     (mi.Texture): the roughness, the same texture when isotropic. Parameter ``shadowing``
@@ -32,16 +33,23 @@ class ConductorLobe:
     Parameter ``sample_visible`` (bool): visible normals, else D·cosθ. Parameter ``eta``,
     ``k`` (mi.Texture | None): the complex index (None with ``fresnel`` 'none').
     Parameter ``specular`` (mi.Texture): ks. Parameter ``diffuse`` (mi.Texture | None): ρd,
-    None for no base.
+    None for no base. Parameter ``table`` (multiscatter.Table | None): the albedo table of
+    the lobe's distribution and masking for Kulla & Conty's energy compensation, None for
+    single scattering only.
+
+    **Sampling.** Two samplers: microfacet normals for the single-scattering lobe, and the
+    cosine-weighted hemisphere for the lobes that are smooth in ωo (the diffuse base and the
+    compensation lobe, whose shape (1 − E(μo)) cosθo is close to a cosine). A sampler is
+    picked in proportion to the albedos of its lobes at ωi; the pdf is their mixture.
     """
 
     def __init__(self, kind, alpha_u, alpha_v, shadowing, fresnel, sample_visible, eta, k,
-                 specular, diffuse):
+                 specular, diffuse, table=None):
         self.kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
         self.shadowing, self.sample_visible = shadowing, sample_visible
-        self.fresnel_term = FRESNEL_TERMS[fresnel]
+        self.fresnel, self.fresnel_term = fresnel, FRESNEL_TERMS[fresnel]
         self.eta, self.k = eta, k
-        self.specular, self.diffuse = specular, diffuse
+        self.specular, self.diffuse, self.table = specular, diffuse, table
 
     def distribution(self, si, active) -> microfacet.Distribution:
         """The microfacet distribution at ``si``."""
@@ -53,8 +61,9 @@ class ConductorLobe:
         return (ctx.is_enabled(mi.BSDFFlags.GlossyReflection, 0),
                 self.diffuse is not None and ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, 1))
 
-    def eval_pdf(self, ctx, si, wo, active=True, p_microfacet=None):
-        """(f·cosθo, pdf of :meth:`sample`) at ``wo``: the enabled lobes and their mixture."""
+    def eval_pdf(self, ctx, si, wo, active=True, at_wi=None):
+        """(f·cosθo, pdf of :meth:`sample`) at ``wo``: the enabled lobes and their mixture.
+        ``at_wi``: :meth:`_at_wi` where :meth:`sample` has it."""
         use_mf, use_diffuse = self.enabled(ctx)
         if not (use_mf or use_diffuse):
             return mi.Spectrum(0.0), mi.Float(0.0)
@@ -62,18 +71,22 @@ class ConductorLobe:
         active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
         if lobes.none(active):
             return mi.Spectrum(0.0), mi.Float(0.0)
-        if use_mf:
-            value, pdf = self._microfacet(si, wi, wo, active)
+        if use_mf and not use_diffuse and self.table is None:
+            return lobes.finish(*self._microfacet(si, wi, wo, active), active)
+        if at_wi is None:
+            at_wi = self._at_wi(si, wi, active, use_mf, use_diffuse)
+        p_normal, _, ms_scale = at_wi
+        # the lobes sampled from the cosine-weighted hemisphere: ρd/π·cosθo and f_ms·cosθo
+        value = mi.Spectrum(0.0)
         if use_diffuse:
-            # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
-            value_d = self.diffuse.eval(si, active) * dr.inv_pi * wo.z
-            pdf_d = wo.z * dr.inv_pi
-            if use_mf:  # both: their sum, and the mixture of both samplers' densities
-                if p_microfacet is None:
-                    p_microfacet = self._p_microfacet(si, wi, active)
-                value, pdf = value + value_d, mixture.pdf(p_microfacet, pdf, pdf_d)
-            else:
-                value, pdf = value_d, pdf_d
+            value = self.diffuse.eval(si, active) * dr.inv_pi * wo.z
+        if use_mf and self.table is not None:
+            e_o = self.table.albedo(wo.z, self._alpha(si, active))
+            value = value + ms_scale * (dr.maximum(1.0 - e_o, 0.0) * wo.z)
+        pdf = wo.z * dr.inv_pi
+        if use_mf:  # and the single-scattering lobe, sampled by its microfacet normals
+            value_ss, pdf_ss = self._microfacet(si, wi, wo, active)
+            value, pdf = value + value_ss, mixture.pdf(p_normal, pdf_ss, pdf)
         return lobes.finish(value, pdf, active)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
@@ -87,11 +100,13 @@ class ConductorLobe:
         active = active & (wi.z > 0)  # one-sided: the local frame's z is cosθ
         if lobes.none(active):
             return bs, mi.Spectrum(0.0)
-        if not use_diffuse:
+        if use_mf and not use_diffuse and self.table is None:
             return bs, self._sample_microfacet(si, wi, sample1, sample2, active, bs)
-        # Both lobes: sample1 picks the microfacet lobe with probability p (and, rescaled, a
-        # facet of the V-groove); the weight is f·cosθo over the mixture density.
-        p = self._p_microfacet(si, wi, active) if use_mf else 0.0
+        # sample1 picks the microfacet normals with probability p (and, rescaled, a facet of
+        # the V-groove, or which lobe the cosine sample stands for); the weight is f·cosθo
+        # over the mixture density.
+        at_wi = self._at_wi(si, wi, active, use_mf, use_diffuse)
+        p = at_wi[0] if use_mf else 0.0
         pick = (sample1 < p) if use_mf else False
 
         def reflected():
@@ -100,12 +115,64 @@ class ConductorLobe:
 
         bs.wo = lobes.choose(pick, reflected,
                              lambda: mi.warp.square_to_cosine_hemisphere(sample2))
-        bs.sampled_type = dr.select(pick, mi.UInt32(lobes.flag("GlossyReflection")),
+        glossy = pick | self._cosine_is_glossy(sample1, p, at_wi, use_mf, use_diffuse)
+        bs.sampled_type = dr.select(glossy, mi.UInt32(lobes.flag("GlossyReflection")),
                                     mi.UInt32(lobes.flag("DiffuseReflection")))
-        bs.sampled_component = dr.select(pick, mi.UInt32(0), mi.UInt32(1))
+        bs.sampled_component = dr.select(glossy, mi.UInt32(0), mi.UInt32(1))
         bs.eta = 1.0
-        value, bs.pdf = self.eval_pdf(ctx, si, bs.wo, active, p)
+        value, bs.pdf = self.eval_pdf(ctx, si, bs.wo, active, at_wi)
         return bs, lobes.weight(value, bs.pdf, active)
+
+    def _at_wi(self, si, wi, active, use_mf, use_diffuse):
+        """
+        What the lobes need of ωi alone: (the probability of the microfacet-normal sampler;
+        of a cosine sample, the probability that it stands for the compensation lobe rather
+        than the diffuse base; the compensation's ks·F_ms·(1 − E(μi))/(π (1 − E_avg)), or
+        None). The weights are the lobes' albedos: mean(ks·F(cosθi))·E(μi) of the single
+        scattering (E = 1 without compensation), mean(ks·F_ms)·(1 − E(μi)) of the
+        compensation, mean(ρd) of the diffuse base.
+        """
+        w_normal, w_ms, w_diffuse, ms_scale = 0.0, 0.0, 0.0, None
+        if use_mf:
+            w_normal = dr.mean(self._specular(si, wi.z, 1.0, active))
+            if self.table is not None:
+                ms_scale, e_i, e_avg = self._compensation(si, wi, active)
+                w_normal = w_normal * e_i
+                w_ms = dr.mean(ms_scale) * (dr.pi * dr.maximum(1.0 - e_avg, 0.0))
+        if use_diffuse:
+            w_diffuse = dr.mean(self.diffuse.eval(si, active))
+        p_normal = mixture.probability(w_normal, w_ms + w_diffuse, 1.0 if use_mf else 0.0)
+        return p_normal, mixture.probability(w_ms, w_diffuse, 0.0), ms_scale
+
+    def _cosine_is_glossy(self, sample1, p, at_wi, use_mf, use_diffuse):
+        """Whether a cosine-hemisphere sample stands for the compensation lobe (glossy,
+        component 0) rather than the diffuse base: ``sample1``, past ``p``, rescaled to
+        [0, 1) and compared with the compensation's share of the two lobes' albedos."""
+        if not (use_mf and self.table is not None):
+            return False
+        if not use_diffuse:
+            return True
+        u = (sample1 - p) / dr.maximum(1.0 - p, 1e-30)
+        return u < at_wi[1]
+
+    def _alpha(self, si, active):
+        """The isotropic roughness of the albedo tables: α, or sqrt(αu·αv) when anisotropic
+        (the equivalent roughness of the same D(0), documented with its error in the
+        validation report)."""
+        distr = self.distribution(si, active)
+        return dr.sqrt(distr.alpha_u * distr.alpha_v) if distr.anisotropic else distr.alpha_u
+
+    def _compensation(self, si, wi, active):
+        """(ks·F_ms·(1 − E(μi))/(π (1 − E_avg)), E(μi), E_avg) of Kulla & Conty's lobe."""
+        alpha = self._alpha(si, active)
+        e_i, e_avg = self.table.albedo(wi.z, alpha), self.table.average_albedo(alpha)
+        scale = self.specular.eval(si, active) * multiscatter.lobe(e_i, 0.0, e_avg)
+        if self.fresnel != "none":
+            eta, k = self.eta.eval(si, active), self.k.eval(si, active)
+            f_avg = multiscatter.fresnel_average(eta, k) if self.fresnel == "exact" else \
+                multiscatter.schlick_average(fresnel.r0(eta, k))
+            scale = scale * multiscatter.multiple_fresnel(f_avg, e_avg)
+        return scale, e_i, e_avg
 
     def _sample_microfacet(self, si, wi, sample1, sample2, active, bs):
         """Fill ``bs`` from the microfacet lobe alone; returns the weight in closed form."""
@@ -182,10 +249,3 @@ class ConductorLobe:
             value = value * self.fresnel_term(cos_theta, self.eta.eval(si, active),
                                               self.k.eval(si, active))
         return value
-
-    def _p_microfacet(self, si, wi, active):
-        """Probability of sampling the microfacet lobe when both lobes are on: in proportion
-        to mean(ks·F(cosθi)) and mean(ρd)."""
-        w_mf = dr.mean(self._specular(si, wi.z, 1.0, active))
-        w_d = dr.mean(self.diffuse.eval(si, active))
-        return mixture.probability(w_mf, w_d, 1.0)

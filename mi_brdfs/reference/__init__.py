@@ -21,6 +21,7 @@ import numpy as np
 from .ashikhmin import Ashikhmin
 from .cooktorrance import CookTorrance, RoughDielectric
 from .lafortune import Lafortune
+from .multiscatter import Compensated
 from .lambert import Lambert
 from .orennayar import OrenNayar
 from .phong import Phong
@@ -146,4 +147,5 @@ def _cooktorrance(spec):
     specular = color(spec.get("specular_reflectance"), 1.0)
     if any(x is None for x in (eta, k, specular, diffuse)):
         return None
-    return CookTorrance(alpha, eta=eta, k=k, specular=specular, diffuse=diffuse, **params)
+    model = CookTorrance(alpha, eta=eta, k=k, specular=specular, diffuse=diffuse, **params)
+    return Compensated(model) if spec.get("multiscatter") else model

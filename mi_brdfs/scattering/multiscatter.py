@@ -1,0 +1,150 @@
+r"""
+Energy compensation of a single-scattering microfacet lobe (Kulla & Conty 2017, "Revisiting
+Physically Based Shading at Imageworks", SIGGRAPH course "Physically Based Shading in Theory and
+Practice", §"Energy compensation"; after Kelemen & Szirmay-Kalos 2001): the light that a
+microfacet BRDF loses to the bounces between microfacets is given back by a second, reciprocal
+lobe
+
+.. math::
+
+    f_\mathrm{ms}(\omega_i, \omega_o) = F_\mathrm{ms}\,
+        \frac{(1 - E(\mu_i))\,(1 - E(\mu_o))}{\pi\,(1 - E_\mathrm{avg})}, \qquad
+    E_\mathrm{avg} = 2\int_0^1 E(\mu)\,\mu\,d\mu,
+
+where E(μ) is the directional albedo of the single-scattering lobe with F ≡ 1 at incidence
+cosine μ. Then the albedo of f_ss + f_ms with F ≡ 1 is E(μi) + (1 − E(μi)) = 1 at every μi,
+exactly when E is the lobe's own albedo. With a Fresnel term F ≠ 1, each bounce absorbs
+1 − F: Kulla & Conty sum the series of bounces with the hemispherical average
+F_avg = 2∫F(μ)μ dμ, which gives the colour of the compensation
+
+.. math::
+
+    F_\mathrm{ms} = \frac{F_\mathrm{avg}^2\, E_\mathrm{avg}}{1 - F_\mathrm{avg}\,(1 - E_\mathrm{avg})}.
+
+**Tables.** E(μ, α) is tabulated per distribution and masking by ``mi-brdfs tables`` from the
+``cooktorrance`` plugin's own single-scattering lobe (:mod:`mi_brdfs.albedo_tables`) and shipped
+in ``mi_brdfs/data/microfacet_albedo.npz``. The nodes are uniform in x = sqrt(μ) and in
+y = sqrt(α / α_max): the albedo changes fastest at grazing incidence and at small roughness.
+:func:`albedo` interpolates bilinearly in (x, y) in every variant (a gather from a
+``mi.Float`` in JIT variants, a NumPy lookup in scalar ones), and :func:`average_albedo`
+linearly in y: E_avg of a node is the exact integral of the interpolant in μ, so the two are
+consistent between the nodes too and the compensated albedo is 1 up to the interpolation
+error of E alone. Beyond α_max the tables hold their last value (the compensation then falls
+short: the lobe loses energy, it never creates it).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from . import fresnel
+
+#: The tables shipped with the package (written by ``mi-brdfs tables``).
+TABLE_PATH = Path(__file__).resolve().parent.parent / "data" / "microfacet_albedo.npz"
+
+#: Gauss-Legendre nodes and weights on [−1, 1] of F_avg (:func:`fresnel_average`).
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
+
+_TINY = 1e-30
+
+
+def table_key(kind: str, shadowing: str) -> str:
+    """The name of a distribution's table in the file: e.g. 'ggx-smith'."""
+    return f"{kind}-{shadowing}"
+
+
+@lru_cache(maxsize=None)
+def load_tables(path: str = str(TABLE_PATH)) -> dict:
+    """The tables as float64 NumPy arrays: ``E[key]`` (n_alpha, n_mu), ``E_avg[key]``
+    (n_alpha,) and the scalar ``alpha_max``."""
+    with np.load(path) as data:
+        keys = [k[len("E_"):] for k in data.files if k.startswith("E_") and
+                not k.startswith("E_avg_")]
+        return {"E": {k: np.asarray(data["E_" + k], np.float64) for k in keys},
+                "E_avg": {k: np.asarray(data["E_avg_" + k], np.float64) for k in keys},
+                "alpha_max": float(data["alpha_max"])}
+
+
+class Table:
+    """
+    E(μ, α) and E_avg(α) of one distribution and masking, in the current variant (the arrays
+    are built when the lobe is, so each variant gets its own types). ``E`` and ``E_avg``
+    override the shipped tables (the tests perturb them).
+    """
+
+    def __init__(self, kind: str, shadowing: str, E=None, E_avg=None):
+        tables = load_tables()
+        key = table_key(kind, shadowing)
+        E = tables["E"][key] if E is None else np.asarray(E, np.float64)
+        E_avg = tables["E_avg"][key] if E_avg is None else np.asarray(E_avg, np.float64)
+        self.n_alpha, self.n_mu = E.shape
+        self.alpha_max = tables["alpha_max"]
+        jit = dr.is_jit_v(mi.Float)
+        self._E = mi.Float(E.ravel().astype(np.float32)) if jit else E.ravel()
+        self._E_avg = mi.Float(E_avg.astype(np.float32)) if jit else E_avg
+
+    def _gather(self, table, index):
+        if dr.is_jit_v(mi.Float):
+            return dr.gather(mi.Float, table, index)
+        return float(table[int(index)])
+
+    def _cell(self, t, n):
+        """(index of the node below, fraction to the next) of t ∈ [0, 1] on n uniform nodes."""
+        s = dr.clip(t, 0.0, 1.0) * (n - 1)
+        i = dr.minimum(mi.UInt32(dr.floor(s)), n - 2)
+        return i, s - mi.Float(i)
+
+    def albedo(self, mu, alpha):
+        """E(μ, α), bilinear in (sqrt μ, sqrt(α/α_max))."""
+        i, tx = self._cell(dr.sqrt(dr.maximum(mu, 0.0)), self.n_mu)
+        j, ty = self._cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
+        row0, row1 = j * self.n_mu + i, (j + 1) * self.n_mu + i
+        e00, e01 = self._gather(self._E, row0), self._gather(self._E, row0 + 1)
+        e10, e11 = self._gather(self._E, row1), self._gather(self._E, row1 + 1)
+        return dr.lerp(dr.lerp(e00, e01, tx), dr.lerp(e10, e11, tx), ty)
+
+    def average_albedo(self, alpha):
+        """E_avg(α), linear in sqrt(α/α_max)."""
+        j, ty = self._cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
+        return dr.lerp(self._gather(self._E_avg, j), self._gather(self._E_avg, j + 1), ty)
+
+
+def lobe(e_i, e_o, e_avg):
+    """(1 − E(μi))(1 − E(μo)) / (π (1 − E_avg)): f_ms without F_ms, and without the cosine."""
+    missing = dr.maximum(1.0 - e_i, 0.0) * dr.maximum(1.0 - e_o, 0.0)
+    return missing * dr.inv_pi / dr.maximum(1.0 - e_avg, 1e-7)
+
+
+def multiple_fresnel(f_avg, e_avg):
+    """F_ms = F_avg² E_avg / (1 − F_avg (1 − E_avg)), per channel: 1 where F ≡ 1."""
+    return dr.square(f_avg) * e_avg / dr.maximum(1.0 - f_avg * (1.0 - e_avg), _TINY)
+
+
+def fresnel_average(eta, k):
+    r"""
+    F_avg = 2∫₀¹ F(μ) μ dμ of :func:`mi_brdfs.scattering.fresnel.exact`, per channel, by an
+    8-node Gauss-Legendre rule (within 2e-5 of 3000 nodes for conductors and dielectrics).
+    Where k = 0 and η < 1, F = 1 below the critical cosine μc = sqrt(1 − η²) (total internal
+    reflection), which gives μc² in closed form, and F falls like sqrt(μ − μc) above it: the
+    rule runs there in t with μ = μc + (1 − μc) t², which makes the integrand smooth.
+    """
+    tir = (k == 0.0) & (eta < 1.0)
+    mu_c2 = dr.select(tir, dr.maximum(1.0 - dr.square(eta), 0.0), 0.0)
+    mu_c = dr.sqrt(mu_c2)
+    total = mu_c2
+    for x, w in zip(_GL_X, _GL_W):
+        t = 0.5 * (float(x) + 1.0)
+        mu = mu_c + (1.0 - mu_c) * dr.select(tir, t * t, t)
+        jacobian = (1.0 - mu_c) * dr.select(tir, 2.0 * t, 1.0)
+        total = total + float(w) * jacobian * mu * fresnel.exact(mu, eta, k)
+    return total
+
+
+def schlick_average(f0):
+    """F_avg of Schlick's approximation in closed form: R0 + (1 − R0)/21 (2∫(1−μ)⁵μ dμ = 1/21)."""
+    return f0 + (1.0 - f0) / 21.0
