@@ -17,9 +17,11 @@ def sections() -> list:
                    transmission, ward)
     from . import lafortune
     from . import ashikhmin
+    from . import multiscatter
     return [lambert.section, phong.section, cooktorrance.section, anisotropy.section,
-            transmission.section, ward.section, orennayar.section, lafortune.section,
-            ashikhmin.section, fits.section, claims.section, extremes.section]
+            transmission.section, multiscatter.section, ward.section, orennayar.section,
+            lafortune.section, ashikhmin.section, fits.section, claims.section,
+            extremes.section]
 
 
 __all__ = ["Context", "Section", "run", "sections"]
