@@ -34,8 +34,10 @@ VCAVITY_ALPHAS, VCAVITY_THETAS = (0.1, 0.5, 1.0), (0.0, 60.0, 85.0)
 #: Anisotropic roughness (αu, αv), the incident angles and azimuths (degrees); flagged above.
 ANISO_PAIRS = ((0.1, 0.5), (0.2, 1.0), (0.05, 0.8))
 ANISO_THETAS, ANISO_PHIS, ANISO_FLAG = (0.0, 60.0, 85.0), (0.0, 45.0, 90.0), 0.01
-#: sample(): the side of the jittered grid of a replicate, and the most replicates (full, quick).
-STRATA, REPLICATES = (500, 200), (64, 4)
+#: sample(): the side of the jittered grid of a replicate, the replicates of a block (16: the
+#: standard error from their spread has 15 degrees of freedom), and the most replicates (full,
+#: quick).
+STRATA, BLOCK, REPLICATES = (250, 100), 16, (256, 16)
 
 
 def _stratified_mean(bsdf, wi, m: int, rng) -> float:
@@ -51,15 +53,15 @@ def sampled(ctx: Context, sp: dict, theta: float, phi: float = 0.0, seed=0,
             precise: bool = True) -> tuple[float, float, int]:
     """
     E(θ, φ) (degrees) as the mean ``sample()`` weight: (mean, standard error, samples). Blocks
-    of four independent stratified replicates, their spread the standard error; ``precise``
+    of BLOCK independent stratified replicates, their spread the standard error; ``precise``
     adds blocks until 4 SE ≤ TARGET/4 or REPLICATES replicates.
     """
     bsdf, rng = load_bsdf(sp), np.random.default_rng(seed)
     wi = direction(math.radians(theta), math.radians(phi))
-    m, most = ctx.n(*STRATA), ctx.n(REPLICATES[0] if precise else 4, REPLICATES[1])
+    m, most = ctx.n(*STRATA), ctx.n(*REPLICATES) if precise else BLOCK
     means: list[float] = []
     while True:
-        means += [_stratified_mean(bsdf, wi, m, rng) for _ in range(4)]
+        means += [_stratified_mean(bsdf, wi, m, rng) for _ in range(BLOCK)]
         se = float(np.std(means, ddof=1) / math.sqrt(len(means)))
         if 4 * se <= TARGET / 4 or len(means) >= most:
             return float(np.mean(means)), se, len(means) * m * m
