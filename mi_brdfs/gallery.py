@@ -16,7 +16,9 @@ models apart:
 * ``cooktorrance``: the V-cavity masking of Cook & Torrance (1982, "A Reflectance Model for
   Computer Graphics") against Smith's, Beckmann against GGX's long tails (Walter et al. 2007,
   "Microfacet Models for Refraction through Rough Surfaces"), anisotropic roughness, and the
-  rough dielectric interface of Walter et al. 2007. The sphere's tangent (``alpha_u``) runs
+  rough dielectric interface of Walter et al. 2007, and the energy compensation of Kulla &
+  Conty (2017, "Revisiting Physically Based Shading at Imageworks"), whose rough gold keeps
+  the light single scattering loses. The sphere's tangent (``alpha_u``) runs
   along its parallels, around the pole, which faces the camera: αu < αv stretches the
   highlight radially, αu > αv around the pole, as on a disk brushed in circles.
 * ``ward``: the three normalisations of Ward's lobe (Ward 1992, "Measuring and Modeling
@@ -116,6 +118,9 @@ ROWS: tuple[Row, ...] = (
         {"type": "cooktorrance", "shadowing": "smith", "material": "Al"},
         tuple((f"αu = {u:g}, αv = {v:g}", {"alpha_u": u, "alpha_v": v})
               for u, v in ((0.05, 0.3), (0.3, 0.05), (0.05, 0.6)))),
+    Row("cooktorrance multiscatter", "GGX, smith, gold, energy compensation",
+        {"type": "cooktorrance", "distribution": "ggx", "shadowing": "smith", "material": "Au",
+         "multiscatter": True}, tuple((f"α = {a:g}", {"alpha": a}) for a in (0.3, 0.6, 1.0))),
     Row("cooktorrance transmission", "GGX, smith, η = 1.5",
         {"type": "cooktorrance", "distribution": "ggx", "shadowing": "smith",
          "transmission": True, "eta": 1.5}, _alphas()),

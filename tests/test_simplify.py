@@ -509,3 +509,35 @@ def test11_ashikhmin_and_lafortune_candidates(variant_llvm_ad_rgb):
 
 def _params_of(element) -> dict:
     return {c.get("name"): c.get("value") for c in element}
+
+
+MULTISCATTER = b"""<scene version="3.0.0">
+    <bsdf type="cooktorrance" id="compensated">
+        <boolean name="multiscatter" value="true"/>
+        <string name="distribution" value="ggx"/>
+        <string name="shadowing" value="smith"/>
+        <float name="alpha" value="0.8"/>
+        <string name="material" value="Au"/>
+    </bsdf>
+</scene>"""
+
+
+def test12_multiscatter_can_be_dropped(variant_llvm_ad_rgb):
+    """A compensated cooktorrance gets ``multiscatter=false`` (single scattering: it loads and
+    evaluates below the compensated one) and roughconductor, said to lack the compensation."""
+    from mi_brdfs.bsdfspec import load_bsdf
+    from mi_brdfs.checks import batch
+    from mi_brdfs.simplify import candidates_for
+
+    (material,), _ = scene_bsdfs(MULTISCATTER)
+    got = {label: (element, note) for label, _, element, note in
+           candidates_for(material, {}, lambda *job: "fit skipped")}
+    element, note = got["multiscatter=false"]
+    assert _params_of(element)["multiscatter"] == "false" and "compensation" in note
+    wi, wo = (batch.random_directions(np.random.default_rng(2), 4096, sphere=False)
+              for _ in range(2))
+    single = batch.evaluate(load_bsdf(ET.tostring(element, encoding="unicode")), wi, wo).value
+    both = batch.evaluate(load_bsdf(material.text), wi, wo).value
+    assert np.all(single <= both) and np.any(single < both)
+    rough, note = got["roughconductor"]
+    assert "multiscatter" not in _params_of(rough) and note.startswith("single scattering")

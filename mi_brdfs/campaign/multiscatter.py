@@ -34,6 +34,10 @@ VCAVITY_ALPHAS, VCAVITY_THETAS = (0.1, 0.5, 1.0), (0.0, 60.0, 85.0)
 #: Anisotropic roughness (αu, αv), the incident angles and azimuths (degrees); flagged above.
 ANISO_PAIRS = ((0.1, 0.5), (0.2, 1.0), (0.05, 0.8))
 ANISO_THETAS, ANISO_PHIS, ANISO_FLAG = (0.0, 60.0, 85.0), (0.0, 45.0, 90.0), 0.01
+#: The sampler whose mean weight is the BRDF's albedo: Beckmann with Smith's visible normals
+#: is not (Mitsuba's sampler draws the exact visible normals, its pdf has Walter's rational
+#: G1: the Cook-Torrance section), so there the furnace's sample() is D·cosθ's.
+UNBIASED = {("beckmann", "smith"): {"sample_visible": False}}
 #: sample(): the side of the jittered grid of a replicate, the replicates of a block (16: the
 #: standard error from their spread has 15 degrees of freedom), and the most replicates (full,
 #: quick).
@@ -99,10 +103,11 @@ def furnace_grid(ctx: Context, kinds=KINDS, shadowing: str = "smith", alphas=Non
                 ss, e, e_tab = closed_form(kind, alpha, theta, shadowing=shadowing)
                 r = {"ss": float(ss[0]), "e": float(e[0]), "tab": e_tab,
                      "ie": plugin_energy(spec(kind, alpha, True, shadowing), theta, alpha)}
-                r["ss_s"] = sampled(ctx, spec(kind, alpha, False, shadowing), theta,
+                unbiased = UNBIASED.get((kind, shadowing), {})
+                r["ss_s"] = sampled(ctx, spec(kind, alpha, False, shadowing, **unbiased), theta,
                                     seed=(1, i, j, t), precise=False)[0]
-                r["e_s"], r["se"], r["n"] = sampled(ctx, spec(kind, alpha, True, shadowing),
-                                                    theta, seed=(2, i, j, t))
+                r["e_s"], r["se"], r["n"] = sampled(
+                    ctx, spec(kind, alpha, True, shadowing, **unbiased), theta, seed=(2, i, j, t))
                 if walk:
                     w = walk_albedo(kind, alpha, theta, ctx.n(200_000, 20_000), (3, i, j, t))
                     r.update(total=float(w.total[0]), lost=w.lost,
@@ -368,7 +373,8 @@ def _markdown(ctx: Context, s: Section, t_furnace, t_single, f_furnace, t_vcavit
         "`cooktorrance` with `multiscatter=true`: Kulla & Conty's energy compensation (2017) "
         "adds to the single-scattering lobe f_ss the reciprocal lobe F_ms (1 − E(μi)) "
         "(1 − E(μo)) / (π (1 − E_avg)), E(μ, α) the albedo of f_ss with F ≡ 1 read from the "
-        "shipped tables (`mi-brdfs tables`, built from the plugin's own sample() weights), so "
+        "shipped tables (`mi-brdfs tables`, built from the plugin's own single-scattering "
+        "lobe: the mean sample() weight of its D·cosθ sampler, i.e. ∫ f cosθo), so "
         "that the albedo with F ≡ 1 is 1. The true multiple scattering is the random walk on "
         "the Smith microsurface (Heitz, Hanika, d'Eon & Dachsbacher 2016; "
         "`mi_brdfs/reference/randomwalk.py`, float64). The walk's single scattering carries "
@@ -380,7 +386,8 @@ def _markdown(ctx: Context, s: Section, t_furnace, t_single, f_furnace, t_vcavit
         f"**White furnace** (F ≡ 1, Smith's masking): E(θ) − 1 of the compensated BRDF, "
         "first in closed form (its energy ∫ f cosθo dωo: the float64 reference's quadrature of "
         "f_ss over the half vector plus the lobe's albedo 1 − E_table(μi)), then as the mean "
-        "sample() weight (stratified replicates, ± 1 standard error; up to "
+        "sample() weight (stratified replicates, ± 1 standard error; Beckmann with D·cosθ "
+        "sampling, whose weights are unbiased; up to "
         f"{ctx.n(*REPLICATES) * ctx.n(*STRATA) ** 2:,} samples a point). Target: "
         f"|E − 1| ≤ {TARGET:g}. Worst in closed form: GGX "
         f"{v['multiscatter: worst ggx smith closed form']}, Beckmann "
@@ -392,11 +399,7 @@ def _markdown(ctx: Context, s: Section, t_furnace, t_single, f_furnace, t_vcavit
         f"{v['multiscatter: eval vs closed form beckmann smith']} (Beckmann).", "",
         t_furnace, "",
         "**Single scattering against the walk**: per θ, E_ss by quadrature (∫ f_ss cosθo) / "
-        "E_ss from sample() / the table's E / the walk's order 1. The table was built from "
-        "sample() weights, so the compensation cancels the sample() albedo's loss; where "
-        "sample() and ∫ f cosθo differ (Beckmann: Mitsuba's sampler draws the exact visible "
-        "normals but weighs them with Walter's rational G1, see the Cook-Torrance section), "
-        "the closed-form E above inherits the difference. E_ss − walk order 1 spans GGX "
+        "E_ss from sample() / the table's E / the walk's order 1. E_ss − walk order 1 spans GGX "
         f"{v['multiscatter: ss - order 1 ggx']}, Beckmann "
         f"{v['multiscatter: ss - order 1 beckmann']}.", "", t_single, "",
         image(ctx, f_furnace, "compensated white furnace"), "",

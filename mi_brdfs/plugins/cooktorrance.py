@@ -209,8 +209,9 @@ class CookTorrance(mi.BSDF):
          gives back the light the microfacet lobe loses to bounces between microfacets, so
          that a white furnace reads 1 at every roughness and angle (F ≡ 1); coloured by
          Kulla & Conty's F_ms with a Fresnel term. Reflection only (not with
-         ``transmission``); anisotropic surfaces use the tables of sqrt(αu·αv)
-         (Default: |false|: single scattering, and no cost)
+         ``transmission``); anisotropic surfaces use the tables of sqrt(αu·αv), an
+         approximation (warned: the furnace departs from 1 both ways) (Default: |false|:
+         single scattering, and no cost)
 
      * - transmission
        - |bool|
@@ -347,6 +348,11 @@ class CookTorrance(mi.BSDF):
         self.m_sample_visible = properties.boolean(props, PLUGIN, "sample_visible", True)
         #: Kulla & Conty's energy compensation (reflection only).
         self.m_multiscatter = properties.boolean(props, PLUGIN, "multiscatter", False)
+        if self.m_multiscatter and self.m_anisotropic:
+            properties.warn(PLUGIN, "multiscatter with alpha_u, alpha_v: the albedo tables are "
+                                    "isotropic, read at sqrt(alpha_u*alpha_v), so the white "
+                                    "furnace departs from 1 (below, and at grazing incidence "
+                                    "above it; validation/REPORT.md measures by how much)")
         if self.m_transmission:
             self._read_transmission(props)
         else:

@@ -50,6 +50,14 @@ class ConductorLobe:
         self.fresnel, self.fresnel_term = fresnel, FRESNEL_TERMS[fresnel]
         self.eta, self.k = eta, k
         self.specular, self.diffuse, self.table = specular, diffuse, table
+        #: The table at the surface's roughness where it is the same everywhere (no texture):
+        #: a lookup then interpolates in μ only.
+        self.row = None
+        if table is not None and not (alpha_u.is_spatially_varying() or
+                                      alpha_v.is_spatially_varying()):
+            au = dr.maximum(alpha_u.mean(), microfacet.ALPHA_MIN)
+            av = dr.maximum(alpha_v.mean(), microfacet.ALPHA_MIN)
+            self.row = table.at(au if alpha_v is alpha_u else dr.sqrt(au * av))
 
     def distribution(self, si, active) -> microfacet.Distribution:
         """The microfacet distribution at ``si``."""
@@ -81,7 +89,7 @@ class ConductorLobe:
         if use_diffuse:
             value = self.diffuse.eval(si, active) * dr.inv_pi * wo.z
         if use_mf and self.table is not None:
-            e_o = self.table.albedo(wo.z, self._alpha(si, active))
+            e_o = self._albedos(si, wo.z, active)[0]
             value = value + ms_scale * (dr.maximum(1.0 - e_o, 0.0) * wo.z)
         pdf = wo.z * dr.inv_pi
         if use_mf:  # and the single-scattering lobe, sampled by its microfacet normals
@@ -128,17 +136,18 @@ class ConductorLobe:
         What the lobes need of ωi alone: (the probability of the microfacet-normal sampler;
         of a cosine sample, the probability that it stands for the compensation lobe rather
         than the diffuse base; the compensation's ks·F_ms·(1 − E(μi))/(π (1 − E_avg)), or
-        None). The weights are the lobes' albedos: mean(ks·F(cosθi))·E(μi) of the single
-        scattering (E = 1 without compensation), mean(ks·F_ms)·(1 − E(μi)) of the
-        compensation, mean(ρd) of the diffuse base.
+        None). The weights are the lobes' albedos: mean(ks·F(cosθi)) of the single scattering
+        without compensation, with it mean(ks·F_avg)·E(μi) (F_avg is at hand; a weight
+        needs no exact value), mean(ks·F_ms)·(1 − E(μi)) of the compensation, mean(ρd) of
+        the diffuse base.
         """
         w_normal, w_ms, w_diffuse, ms_scale = 0.0, 0.0, 0.0, None
-        if use_mf:
+        if use_mf and self.table is None:
             w_normal = dr.mean(self._specular(si, wi.z, 1.0, active))
-            if self.table is not None:
-                ms_scale, e_i, e_avg = self._compensation(si, wi, active)
-                w_normal = w_normal * e_i
-                w_ms = dr.mean(ms_scale) * (dr.pi * dr.maximum(1.0 - e_avg, 0.0))
+        elif use_mf:  # F_avg, which the compensation needs anyway, stands for F(cosθi)
+            ms_scale, e_i, e_avg, ks_f_avg = self._compensation(si, wi, active)
+            w_normal = dr.mean(ks_f_avg) * e_i
+            w_ms = dr.mean(ms_scale) * (dr.pi * dr.maximum(1.0 - e_avg, 0.0))
         if use_diffuse:
             w_diffuse = dr.mean(self.diffuse.eval(si, active))
         p_normal = mixture.probability(w_normal, w_ms + w_diffuse, 1.0 if use_mf else 0.0)
@@ -162,17 +171,26 @@ class ConductorLobe:
         distr = self.distribution(si, active)
         return dr.sqrt(distr.alpha_u * distr.alpha_v) if distr.anisotropic else distr.alpha_u
 
-    def _compensation(self, si, wi, active):
-        """(ks·F_ms·(1 − E(μi))/(π (1 − E_avg)), E(μi), E_avg) of Kulla & Conty's lobe."""
+    def _albedos(self, si, mu, active):
+        """(E(μ), E_avg) at the roughness at ``si``."""
+        if self.row is not None:
+            return self.row.albedo(mu), self.row.average
         alpha = self._alpha(si, active)
-        e_i, e_avg = self.table.albedo(wi.z, alpha), self.table.average_albedo(alpha)
-        scale = self.specular.eval(si, active) * multiscatter.lobe(e_i, 0.0, e_avg)
+        return self.table.albedo(mu, alpha), self.table.average_albedo(alpha)
+
+    def _compensation(self, si, wi, active):
+        """(ks·F_ms·(1 − E(μi))/(π (1 − E_avg)), E(μi), E_avg, ks·F_avg) of Kulla & Conty's
+        lobe."""
+        e_i, e_avg = self._albedos(si, wi.z, active)
+        ks = self.specular.eval(si, active)
+        scale, ks_f_avg = ks * multiscatter.lobe(e_i, 0.0, e_avg), ks
         if self.fresnel != "none":
             eta, k = self.eta.eval(si, active), self.k.eval(si, active)
             f_avg = multiscatter.fresnel_average(eta, k) if self.fresnel == "exact" else \
                 multiscatter.schlick_average(fresnel.r0(eta, k))
             scale = scale * multiscatter.multiple_fresnel(f_avg, e_avg)
-        return scale, e_i, e_avg
+            ks_f_avg = ks * f_avg
+        return scale, e_i, e_avg, ks_f_avg
 
     def _sample_microfacet(self, si, wi, sample1, sample2, active, bs):
         """Fill ``bs`` from the microfacet lobe alone; returns the weight in closed form."""

@@ -14,7 +14,9 @@ inside ``twosided``, ``blendbsdf``, ``mask``, ... are found too):
 
 * switches of the plugins: ``cooktorrance`` with ``fresnel=schlick`` (Schlick 1994, "An
   Inexpensive BRDF Model for Physically-based Rendering", CGF 13(3)), the other ``distribution``
-  (``beckmann``/``ggx``), the other ``sample_visible``; ``orennayar`` ``form=qualitative``;
+  (``beckmann``/``ggx``), the other ``sample_visible``, ``multiscatter=false`` (the energy
+  compensation of Kulla & Conty 2017 left out: what it costs against what the scene shows of
+  it); ``orennayar`` ``form=qualitative``;
 * the weaker lobe of a two-lobe model left out (``phong``, ``ward``, ``cooktorrance`` with a
   diffuse base; weaker by directional albedo at 45°): a glossy-only model, or ``diffuse`` with
   the diffuse lobe's reflectance; ``ashikhmin``'s diffuse term where it is the weaker (its

@@ -164,7 +164,8 @@ def _to_roughconductor(element, p) -> tuple | None:
     if p.get("transmission") or not _zero(p.get("diffuse_reflectance", 0.0)) \
             or p.get("fresnel", "exact") == "schlick":
         return None
-    out = _drop(_retyped(element, "roughconductor"), "shadowing", "fresnel", "diffuse_reflectance")
+    out = _drop(_retyped(element, "roughconductor"), "shadowing", "fresnel", "diffuse_reflectance",
+                "multiscatter")
     if p.get("fresnel") == "none":
         _drop(out, "material", "eta", "k")
         _set(out, "string", "material", "none")
@@ -175,6 +176,9 @@ def _to_roughconductor(element, p) -> tuple | None:
     smith = p.get("shadowing", "vcavity") == "smith"
     note = "the same model (Smith masking)" if smith else \
         "Smith's masking in place of the V-cavity's"
+    if p.get("multiscatter") is True:
+        note = ("single scattering (no energy compensation), "
+                + ("Smith masking" if smith else note))
     return ("roughconductor", "built-in", out, note)
 
 
@@ -203,6 +207,10 @@ def _switches(element, p, kind) -> list:
         out.append((f"distribution={other}", "switch",
                     _set(copy.deepcopy(element), "string", "distribution", other),
                     "the same α"))
+        if p.get("multiscatter") is True:
+            out.append(("multiscatter=false", "switch",
+                        _set(copy.deepcopy(element), "boolean", "multiscatter", False),
+                        "single scattering: the energy compensation left out"))
         visible = p.get("sample_visible", True)
         out.append((f"sample_visible={str(not visible).lower()}", "switch",
                     _set(copy.deepcopy(element), "boolean", "sample_visible", not visible),

@@ -76,6 +76,21 @@ CONFIGS = {
 }
 
 
+def test03b_a_textured_roughness_takes_the_2d_lookup(variants_rgb, np_rng):
+    """A bitmap α of one value evaluates through the 2D table lookup as the uniform α does
+    through the row at its roughness (:meth:`Table.at`), to float32 rounding."""
+    base = spec(distribution="ggx", shadowing="smith")
+    textured = dict(base, alpha={"type": "bitmap", "raw": True, "filter_type": "nearest",
+                                 "bitmap": mi.Bitmap(np.full((4, 4), 0.55, np.float32))})
+    n = 32 if mi.variant().startswith("scalar") else 4096
+    wi, wo = random_directions(np_rng, n, lower=False), random_directions(np_rng, n, lower=False)
+    a = eval_pdf(mi.load_dict(dict(base, alpha=0.55)), wi, wo)
+    b = eval_pdf(mi.load_dict(textured), wi, wo)
+    assert mi.load_dict(textured)._lobe.row is None
+    np.testing.assert_allclose(b[0], a[0], rtol=2e-5, atol=1e-7)
+    np.testing.assert_allclose(b[1], a[1], rtol=2e-5, atol=1e-7)
+
+
 @pytest.mark.parametrize("name", CONFIGS)
 def test03_eval_equals_the_float64_reference(variants_rgb, np_rng, name):
     """eval against single scattering plus Kulla & Conty's lobe in float64 (E read from the
@@ -91,30 +106,36 @@ def test03_eval_equals_the_float64_reference(variants_rgb, np_rng, name):
 
 
 def test04_fresnel_average(variant_llvm_ad_rgb):
-    """F_avg by 8 Gauss-Legendre nodes (split at the critical angle where k = 0 and η < 1)
-    against 3000 nodes in float64; Schlick's closed form R0 + (1 − R0)/21 likewise."""
-    cases = [(0.143, 3.983), (1.1, 2.5), (1.5, 0.0), (3.0, 0.0), (0.5, 0.0), (0.05, 0.5)]
+    """F_avg by 5 Gauss-Legendre nodes (split at the critical angle where k = 0 and η < 1)
+    against 3000 nodes in float64 (within 7e-5 in float64, 1e-4 allowed for float32);
+    Schlick's closed form R0 + (1 − R0)/21 likewise."""
+    cases = [(0.143, 3.983), (1.1, 2.5), (1.5, 0.0), (3.0, 0.0), (0.5, 0.0), (0.9, 0.0),
+             (0.05, 0.5)]
     for eta, k in cases:
         got = multiscatter.fresnel_average(mi.Float(eta), mi.Float(k))[0]
         want = ref_ms.fresnel_average("exact", eta, k)[0]
-        assert got == pytest.approx(want, abs=2e-5), (eta, k)
+        assert got == pytest.approx(want, abs=1e-4), (eta, k)
         got = multiscatter.schlick_average(((eta - 1) ** 2 + k * k) / ((eta + 1) ** 2 + k * k))
         assert got == pytest.approx(ref_ms.fresnel_average("schlick", eta, k)[0], abs=1e-6)
 
 
 # -- energy -------------------------------------------------------------------------------------
 
-FURNACE = [("ggx", "smith", 1.0), ("beckmann", "smith", 0.6), ("ggx", "vcavity", 0.3)]
+#: (distribution, masking, α, sample_visible): Beckmann with Smith's visible normals is left
+#: out, whose sample weights carry Mitsuba's rational-G1 bias (test_cooktorrance.py, test15);
+#: there D·cosθ sampling measures the BRDF's albedo.
+FURNACE = [("ggx", "smith", 1.0, True), ("beckmann", "smith", 0.6, False),
+           ("ggx", "vcavity", 0.3, True)]
 
 
-@pytest.mark.parametrize("kind,shadowing,alpha", FURNACE)
-def test05_white_furnace_reads_one(variant_llvm_ad_rgb, kind, shadowing, alpha):
+@pytest.mark.parametrize("kind,shadowing,alpha,visible", FURNACE)
+def test05_white_furnace_reads_one(variant_llvm_ad_rgb, kind, shadowing, alpha, visible):
     """
     F ≡ 1: the albedo from sample() is 1 within 2e-3 (the target; the table's interpolation
     error is below 1e-3) plus 4 standard errors, at 0°, 60° and 85°. A table 1 % low fails
     (test06). The grid over α ∈ [0.05, 1] and θ up to 89° runs in ``make validate``.
     """
-    s = spec(distribution=kind, shadowing=shadowing, alpha=alpha)
+    s = spec(distribution=kind, shadowing=shadowing, alpha=alpha, sample_visible=visible)
     for theta in (0.0, 60.0, 85.0):
         mean, err = checks.albedo_sampled(mi.load_dict(s), math.radians(theta), n=400_000)
         assert abs(mean[0] - 1.0) <= 2e-3 + 4 * err[0], (theta, mean, err)
@@ -128,6 +149,7 @@ def test06_a_table_off_by_one_percent_fails_the_furnace(variant_llvm_ad_rgb):
     lobe = bsdf._lobe
     lobe.table = multiscatter.Table("ggx", "smith", tables["E"][key] * 0.99,
                                     tables["E_avg"][key] * 0.99)
+    lobe.row = lobe.table.at(mi.Float(1.0))
     mean, err = checks.albedo_sampled(bsdf, math.radians(85.0), n=400_000)
     assert abs(mean[0] - 1.0) > 2e-3 + 4 * err[0], (mean, err)
 
@@ -191,11 +213,11 @@ def test11_sampled_component_of_the_cosine_samples(variant_llvm_ad_rgb, np_rng):
     wi = np.tile([0.0, 0.0, 1.0], (n, 1))
     out = sample(bsdf, wi, np_rng.random(n), np_rng.random((n, 2)))
     diffuse = (out["component"] == 1).mean()
-    # the mixture at normal incidence: ρd against E(1)·F(1) and F_ms·(1 − E(1))
+    # the mixture at normal incidence: ρd against E(1)·F_avg and F_ms·(1 − E(1))
     model = for_spec(s)
     e_i = ref_ms.albedo(model.E, model.alpha_max, 1.0, model.alpha)
-    f0 = ((2 - 1) ** 2 + 1) / ((2 + 1) ** 2 + 1)
-    weights = np.array([f0 * e_i, model.F_ms[0] * (1 - e_i), 0.3])
+    f_avg = ref_ms.fresnel_average("schlick", 2.0, 1.0)[0]
+    weights = np.array([f_avg * e_i, model.F_ms[0] * (1 - e_i), 0.3])
     assert diffuse == pytest.approx(weights[2] / weights.sum(), abs=0.01)
 
 
