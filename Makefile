@@ -47,12 +47,12 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(VENV)/bin/mi-brdfs bench --out validation $(QUOTING)
 
-# The validation campaign: validation/REPORT.md and validation/figures/ (about 3 min)
+# The validation campaign: validation/REPORT.md and validation/figures/ (about 20 min on 2 cores)
 validate: $(STAMP)
 	$(VENV)/bin/mi-brdfs validate --out validation $(QUOTING)
 
 # The audit of every BSDF Mitsuba ships: validation/MITSUBA_AUDIT.md and validation/audit/
-# (about 5 min on 2 cores; resumable: results are cached in validation/audit/.cache)
+# (about 15 min on 2 cores; resumable: results are cached in validation/audit/.cache)
 audit: $(STAMP)
 	$(VENV)/bin/mi-brdfs audit --out validation
 
