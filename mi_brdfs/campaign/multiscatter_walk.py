@@ -18,7 +18,6 @@ more than the walk's orders ≥ 2.
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -64,37 +63,23 @@ def gold_spec(kind: str, alpha, multiscatter: bool = True) -> dict:
                 k={"type": "rgb", "value": list(GOLD[1])})
 
 
-@functools.lru_cache(maxsize=None)
-def table(kind: str, shadowing: str) -> tuple[np.ndarray, float]:
-    """The shipped E(μ, α) of a distribution and masking, read from the file (not through the
-    plugin), and α_max."""
-    with np.load(ref_ms.TABLE_PATH) as data:
-        return np.asarray(data[f"E_{kind}-{shadowing}"], np.float64), float(data["alpha_max"])
-
-
 def closed_form(kind: str, alpha, theta: float, phi: float = 0.0, shadowing: str = "smith",
                 eta=None, k=None) -> tuple[np.ndarray, np.ndarray, float]:
     """
     (E_ss, E, E_table(μi)) at incidence ``theta``, azimuth ``phi`` (degrees), per channel:
     E_ss = ∫ f_ss cosθo dωo of the float64 reference (quadrature over the half vector), and the
     compensated E = E_ss + F_ms (1 − E_table(μi)) in closed form (Kulla & Conty: the lobe's
-    albedo), E_table interpolated from the shipped table at sqrt(αu αv). F ≡ 1 without ``eta``
-    (F_ms = 1), else the exact Fresnel term of η + ik (F_ms from F_avg and E_avg).
+    albedo; :class:`~mi_brdfs.reference.multiscatter.Compensated`, the table read at
+    sqrt(αu αv)). F ≡ 1 without ``eta`` (F_ms = 1), else the exact Fresnel term of η + ik.
     """
     fresnel = "none" if eta is None else "exact"
     base = CookTorrance(alpha, kind, shadowing, fresnel, eta=1.0 if eta is None else eta,
                         k=0.0 if k is None else k)
+    model = ref_ms.Compensated(base)
     e_ss = base.albedo(math.radians(theta), phi=math.radians(phi))
-    E, alpha_max = table(kind, shadowing)
-    au, av = alpha if isinstance(alpha, tuple) else (alpha, alpha)
-    a = math.sqrt(au * av)
-    e_i = float(ref_ms.albedo(E, alpha_max, math.cos(math.radians(theta)), a))
-    f_ms = 1.0
-    if eta is not None:
-        e_avg = ref_ms.average_albedo(E, alpha_max, a, n=512)
-        f_avg = ref_ms.fresnel_average("exact", np.asarray(eta), np.asarray(k), n=256)
-        f_ms = f_avg ** 2 * e_avg / (1.0 - f_avg * (1.0 - e_avg))
-    return e_ss, e_ss + f_ms * (1.0 - e_i), e_i
+    e_i = float(ref_ms.albedo(model.E, model.alpha_max, math.cos(math.radians(theta)),
+                              model.alpha))
+    return e_ss, e_ss + model.F_ms * (1.0 - e_i), e_i
 
 
 def walk_albedo(kind: str, alpha, theta: float, n: int, seed, fresnel=None):

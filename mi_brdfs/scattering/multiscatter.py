@@ -70,6 +70,20 @@ def load_tables(path: str = str(TABLE_PATH)) -> dict:
                 "alpha_max": float(data["alpha_max"])}
 
 
+def _gather(table, index):
+    """``table[index]``: a gather from a ``mi.Float`` in JIT variants, a NumPy lookup else."""
+    if dr.is_jit_v(mi.Float):
+        return dr.gather(mi.Float, table, index)
+    return float(table[int(index)])
+
+
+def _cell(t, n):
+    """(index of the node below, fraction to the next) of t ∈ [0, 1] on n uniform nodes."""
+    s = dr.clip(t, 0.0, 1.0) * (n - 1)
+    i = dr.minimum(mi.UInt32(dr.floor(s)), n - 2)
+    return i, s - mi.Float(i)
+
+
 class Table:
     """
     E(μ, α) and E_avg(α) of one distribution and masking, in the current variant (the arrays
@@ -88,30 +102,19 @@ class Table:
         self._E = mi.Float(E.ravel().astype(np.float32)) if jit else E.ravel()
         self._E_avg = mi.Float(E_avg.astype(np.float32)) if jit else E_avg
 
-    def _gather(self, table, index):
-        if dr.is_jit_v(mi.Float):
-            return dr.gather(mi.Float, table, index)
-        return float(table[int(index)])
-
-    def _cell(self, t, n):
-        """(index of the node below, fraction to the next) of t ∈ [0, 1] on n uniform nodes."""
-        s = dr.clip(t, 0.0, 1.0) * (n - 1)
-        i = dr.minimum(mi.UInt32(dr.floor(s)), n - 2)
-        return i, s - mi.Float(i)
-
     def albedo(self, mu, alpha):
         """E(μ, α), bilinear in (sqrt μ, sqrt(α/α_max))."""
-        i, tx = self._cell(dr.sqrt(dr.maximum(mu, 0.0)), self.n_mu)
-        j, ty = self._cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
+        i, tx = _cell(dr.sqrt(dr.maximum(mu, 0.0)), self.n_mu)
+        j, ty = _cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
         row0, row1 = j * self.n_mu + i, (j + 1) * self.n_mu + i
-        e00, e01 = self._gather(self._E, row0), self._gather(self._E, row0 + 1)
-        e10, e11 = self._gather(self._E, row1), self._gather(self._E, row1 + 1)
+        e00, e01 = _gather(self._E, row0), _gather(self._E, row0 + 1)
+        e10, e11 = _gather(self._E, row1), _gather(self._E, row1 + 1)
         return dr.lerp(dr.lerp(e00, e01, tx), dr.lerp(e10, e11, tx), ty)
 
     def at(self, alpha) -> "Row":
         """The table at one roughness (a uniform α, a width-1 Float or a float): E(μ) on the
         μ nodes, interpolated in α once, so that a lookup gathers 2 values, not 4."""
-        j, ty = self._cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
+        j, ty = _cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
         if dr.is_jit_v(mi.Float):
             i = dr.arange(mi.UInt32, self.n_mu)
             row = dr.lerp(dr.gather(mi.Float, self._E, j * self.n_mu + i),
@@ -124,8 +127,8 @@ class Table:
 
     def average_albedo(self, alpha):
         """E_avg(α), linear in sqrt(α/α_max)."""
-        j, ty = self._cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
-        return dr.lerp(self._gather(self._E_avg, j), self._gather(self._E_avg, j + 1), ty)
+        j, ty = _cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
+        return dr.lerp(_gather(self._E_avg, j), _gather(self._E_avg, j + 1), ty)
 
 
 class Row:
@@ -138,13 +141,8 @@ class Row:
 
     def albedo(self, mu):
         """E(μ), linear in sqrt μ between the nodes."""
-        s = dr.clip(dr.sqrt(dr.maximum(mu, 0.0)), 0.0, 1.0) * (self.n_mu - 1)
-        i = dr.minimum(mi.UInt32(dr.floor(s)), self.n_mu - 2)
-        t = s - mi.Float(i)
-        if dr.is_jit_v(mi.Float):
-            return dr.lerp(dr.gather(mi.Float, self._values, i),
-                           dr.gather(mi.Float, self._values, i + 1), t)
-        return (1.0 - t) * float(self._values[int(i)]) + t * float(self._values[int(i) + 1])
+        i, t = _cell(dr.sqrt(dr.maximum(mu, 0.0)), self.n_mu)
+        return dr.lerp(_gather(self._values, i), _gather(self._values, i + 1), t)
 
 
 def lobe(e_i, e_o, e_avg):
