@@ -370,14 +370,19 @@ def cmd_tables(args) -> int:
     _jit_variant("mi-brdfs tables")
     out = args.out or TABLE_PATH
     samples = args.samples or tables.SAMPLES
-    rows = len(tables.KINDS) * len(tables.SHADOWINGS) * tables.N_ALPHA
+    samples_dielectric = args.samples or tables.SAMPLES_DIELECTRIC
+    rows = len(tables.KINDS) * (len(tables.SHADOWINGS) * tables.N_ALPHA +
+                                tables.N_ETA * tables.N_ALPHA_DIELECTRIC)
     progress = Progress(rows, "albedo tables", unit="rows")
     arrays = tables.build(samples=samples, progress=progress)
+    arrays.update(tables.build_dielectric(samples=samples_dielectric, progress=progress))
     progress.close()
     tables.write(out, arrays)
     print(f"wrote {out}: E(mu, alpha) on {tables.N_MU} x {tables.N_ALPHA} nodes for "
-          f"{', '.join(k[2:] for k in arrays if k.startswith('E_') and 'avg' not in k)}, "
-          f"{samples} x {samples} samples per node")
+          f"{', '.join(k[2:] for k in arrays if k.startswith('E_') and 'avg' not in k)} "
+          f"({samples} x {samples} samples per node); E(mu, alpha, eta) of the dielectric on "
+          f"{tables.N_MU_DIELECTRIC} x {tables.N_ALPHA_DIELECTRIC} x {tables.N_ETA} nodes "
+          f"({samples_dielectric} x {samples_dielectric} samples per node)")
     return 0
 
 

@@ -208,10 +208,11 @@ class CookTorrance(mi.BSDF):
        - Add the energy compensation of Kulla & Conty 2017: a second, reciprocal lobe that
          gives back the light the microfacet lobe loses to bounces between microfacets, so
          that a white furnace reads 1 at every roughness and angle (F ≡ 1); coloured by
-         Kulla & Conty's F_ms with a Fresnel term. Reflection only (not with
-         ``transmission``); anisotropic surfaces use the tables of sqrt(αu·αv), an
-         approximation (warned: the furnace departs from 1 both ways) (Default: |false|:
-         single scattering, and no cost)
+         Kulla & Conty's F_ms with a Fresnel term. With ``transmission``, their dielectric
+         extension: reflection plus refraction reads 1 from either side (importance
+         transport). Anisotropic surfaces use the tables of sqrt(αu·αv), an approximation
+         (warned: the furnace departs from 1 both ways) (Default: |false|: single
+         scattering, and no cost)
 
      * - transmission
        - |bool|
@@ -314,6 +315,17 @@ class CookTorrance(mi.BSDF):
     two lobes' albedos at ωi. ``validation/REPORT.md`` compares it with the true multiple
     scattering of Heitz et al. 2016.
 
+    With ``transmission`` (Kulla & Conty's dielectric extension) E is the albedo E_R+T of
+    reflection plus refraction, tabulated over μ, α and η (32 × 64 × 32 nodes, η from 1/3 to
+    3; beyond, the end of the table is read and the plugin warns), lit from above at η and
+    from below at 1/η. The light single scattering loses, 1 − E(μi) on ωi's side, leaves
+    through a lobe shaped (1 − E'(μo))/(π (1 − E'_avg)) on ωo's side (E' that side's table):
+    the share x refracted, 1 − x reflected. The shares keep the pair reciprocal across the
+    interface (detailed balance: x_above (1 − E_avg,above) = η² x_below (1 − E_avg,below)),
+    from the interface's average transmittance T_avg = 1 − F_avg(η) above, T_avg/η² below:
+    x = T_avg·K/(1 − E_avg), K the smaller 1 − E_avg of the two sides. ks and kt scale the
+    two parts, and radiance through refraction is divided by η² as for the single scattering.
+
     .. tabs::
         .. code-tab:: xml
 
@@ -346,7 +358,7 @@ class CookTorrance(mi.BSDF):
         self.m_fresnel = properties.choice(props, PLUGIN, "fresnel", "exact", FRESNEL)
         #: Sample visible normals (else D·cosθ).
         self.m_sample_visible = properties.boolean(props, PLUGIN, "sample_visible", True)
-        #: Kulla & Conty's energy compensation (reflection only).
+        #: Kulla & Conty's energy compensation.
         self.m_multiscatter = properties.boolean(props, PLUGIN, "multiscatter", False)
         if self.m_multiscatter and self.m_anisotropic:
             properties.warn(PLUGIN, "multiscatter with alpha_u, alpha_v: the albedo tables are "
@@ -365,7 +377,13 @@ class CookTorrance(mi.BSDF):
         self._check_transmission(props)
         #: The relative index int_ior/ext_ior (a Float: refraction bends all wavelengths
         #: alike); m_k and m_material are None.
-        self.m_eta, self.m_k, self.m_material = mi.Float(_read_dielectric(props)), None, None
+        eta = _read_dielectric(props)
+        self.m_eta, self.m_k, self.m_material = mi.Float(eta), None, None
+        eta_max = multiscatter.load_tables()["eta_max"] if self.m_multiscatter else None
+        if eta_max is not None and not 1.0 / eta_max <= eta <= eta_max:
+            properties.warn(PLUGIN, f"multiscatter with eta = {eta:g}: the albedo tables end at "
+                                    f"eta = {1.0 / eta_max:.4g} and {eta_max:g}, and are read "
+                                    f"there, so the white furnace departs from 1")
         #: Factors on the reflection and the refraction lobe.
         self.m_specular_reflectance = properties.reflectance(props, PLUGIN,
                                                              "specular_reflectance", 1.0)
@@ -413,10 +431,6 @@ class CookTorrance(mi.BSDF):
                                  "must be \"smith\" with transmission = true: the V-cavity "
                                  "masking (Cook & Torrance 1982) is derived for light above the "
                                  "surface, and gives no masking for a refracted pair")
-        if self.m_multiscatter:
-            raise ParameterError(PLUGIN, "multiscatter", True,
-                                 "is not available with transmission = true yet (the "
-                                 "compensation is implemented for the reflection lobe only)")
         if self.m_fresnel != "exact":
             raise ParameterError(PLUGIN, "fresnel", self.m_fresnel,
                                  "must be \"exact\" with transmission = true (the refracted "
@@ -463,17 +477,21 @@ class CookTorrance(mi.BSDF):
             self._lobe = DielectricLobe(self.m_distribution, self.m_alpha_u, self.m_alpha_v,
                                         self.m_sample_visible, self.m_eta,
                                         self.m_specular_reflectance,
-                                        self.m_specular_transmittance)
+                                        self.m_specular_transmittance, self._tables())
         else:
             self._lobe = ConductorLobe(self.m_distribution, self.m_alpha_u, self.m_alpha_v,
                                        self.m_shadowing, self.m_fresnel, self.m_sample_visible,
                                        self.m_eta, self.m_k, self.m_specular_reflectance,
-                                       self.m_diffuse_reflectance, self._table())
+                                       self.m_diffuse_reflectance, self._tables())
 
-    def _table(self):
-        """The albedo table of the energy compensation, or None without it."""
+    def _tables(self):
+        """The albedo tables of the energy compensation, or None without it: the conductor's
+        one, or the dielectric's pair at this η (lit from above, from below)."""
         if not self.m_multiscatter:
             return None
+        if self.m_transmission:
+            return multiscatter.dielectric_tables(self.m_distribution,
+                                                  float(dr.slice(self.m_eta)))
         return multiscatter.Table(self.m_distribution, self.m_shadowing)
 
     def to_string(self):

@@ -50,14 +50,9 @@ class ConductorLobe:
         self.fresnel, self.fresnel_term = fresnel, FRESNEL_TERMS[fresnel]
         self.eta, self.k = eta, k
         self.specular, self.diffuse, self.table = specular, diffuse, table
-        #: The table at the surface's roughness where it is the same everywhere (no texture):
-        #: a lookup then interpolates in μ only.
-        self.row = None
-        if table is not None and not (alpha_u.is_spatially_varying() or
-                                      alpha_v.is_spatially_varying()):
-            au = dr.maximum(alpha_u.mean(), microfacet.ALPHA_MIN)
-            av = dr.maximum(alpha_v.mean(), microfacet.ALPHA_MIN)
-            self.row = table.at(au if alpha_v is alpha_u else dr.sqrt(au * av))
+        #: E(μ) and E_avg at the surface's roughness (None without compensation)
+        self.albedos = None if table is None else \
+            multiscatter.Albedos(table, alpha_u, alpha_v)
 
     def distribution(self, si, active) -> microfacet.Distribution:
         """The microfacet distribution at ``si``."""
@@ -164,19 +159,9 @@ class ConductorLobe:
         u = (sample1 - p) / dr.maximum(1.0 - p, 1e-30)
         return u < at_wi[1]
 
-    def _alpha(self, si, active):
-        """The isotropic roughness of the albedo tables: α, or sqrt(αu·αv) when anisotropic
-        (the equivalent roughness of the same D(0), documented with its error in the
-        validation report)."""
-        distr = self.distribution(si, active)
-        return dr.sqrt(distr.alpha_u * distr.alpha_v) if distr.anisotropic else distr.alpha_u
-
     def _albedos(self, si, mu, active):
         """(E(μ), E_avg) at the roughness at ``si``."""
-        if self.row is not None:
-            return self.row.albedo(mu), self.row.average
-        alpha = self._alpha(si, active)
-        return self.table.albedo(mu, alpha), self.table.average_albedo(alpha)
+        return self.albedos(mu, lambda: self.distribution(si, active))
 
     def _compensation(self, si, wi, active):
         """(ks·F_ms·(1 − E(μi))/(π (1 − E_avg)), E(μi), E_avg, ks·F_avg) of Kulla & Conty's

@@ -13,7 +13,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from ..scattering import fresnel, microfacet, vector
+from ..scattering import fresnel, microfacet, mixture, multiscatter, vector
 from . import lobes, properties
 
 
@@ -28,15 +28,35 @@ class DielectricLobe:
     ``sample_visible`` (bool): visible normals, else D·cosθ of Walter's widened α.
     Parameter ``eta`` (mi.Float): the relative index int_ior/ext_ior. Parameter
     ``specular``, ``transmittance`` (mi.Texture): the factors ks and kt on the two lobes.
+    Parameter ``tables`` ((multiscatter.Table, multiscatter.Table) | None): the albedo tables
+    lit from above and from below (:func:`~mi_brdfs.scattering.multiscatter.dielectric_tables`)
+    for the energy compensation, None for single scattering only.
+
+    **Energy compensation** (Kulla & Conty 2017, their dielectric extension): the light that
+    single scattering loses, 1 − E(μi) of the albedo E_R+T on ωi's side, comes back through a
+    lobe (1 − E(μi))(1 − E'(μo))/(π (1 − E'_avg)) on ωo's side, E' that side's albedo: the
+    share 1 − x reflected, x refracted (:func:`~mi_brdfs.scattering.multiscatter.
+    transmitted_shares`, reciprocal across the interface), times ks or kt (and 1/η² for
+    radiance through refraction, as the single scattering). It is sampled from the cosine
+    hemisphere of the side it leaves on, mixed with the microfacet sampler by the albedos:
+    the microfacet sampler with probability E(μi).
     """
 
-    def __init__(self, kind, alpha_u, alpha_v, sample_visible, eta, specular, transmittance):
+    def __init__(self, kind, alpha_u, alpha_v, sample_visible, eta, specular, transmittance,
+                 tables=None):
         self.kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
         self.sample_visible = sample_visible
         # the relative index both ways (opaque: a changed η updates the kernel's inputs)
         self.eta, self.inv_eta = eta, dr.rcp(eta)
         dr.make_opaque(self.eta, self.inv_eta)
         self.specular, self.transmittance = specular, transmittance
+        #: E(μ) and E_avg lit from above and from below, and the interface's average
+        #: transmittance from above, 1 − F_avg(η) (None without compensation)
+        self.albedos = None
+        if tables is not None:
+            self.albedos = tuple(multiscatter.Albedos(t, alpha_u, alpha_v) for t in tables)
+            self.t_above = 1.0 - multiscatter.fresnel_average(self.eta, 0.0, nodes=32)
+            dr.make_opaque(self.t_above)
 
     def distribution(self, si, active) -> microfacet.Distribution:
         """The microfacet distribution at ``si``."""
@@ -54,22 +74,41 @@ class DielectricLobe:
         enabled = self.enabled(ctx)
         if not (enabled[0] or enabled[1]):
             return mi.Spectrum(0.0), mi.Float(0.0)
-        value, pdf = self._terms(si, si.wi, wo, active, enabled,
-                                 ctx.mode == mi.TransportMode.Radiance)
+        radiance = ctx.mode == mi.TransportMode.Radiance
+        value, pdf = self._terms(si, si.wi, wo, active, enabled, radiance)
+        if self.albedos is not None:
+            value, pdf = self._compensated(si, si.wi, wo, active, enabled, radiance,
+                                           value, pdf)
         return lobes.depolarize(value), pdf
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         """(BSDFSample3f, weight): a microfacet normal, then reflection with probability F,
-        else refraction (Walter et al. 2007, §5.3)."""
+        else refraction (Walter et al. 2007, §5.3); with the compensation, that or (picked by
+        ``sample1``) the cosine hemisphere on the side the compensation's share chooses."""
         bs, sample2 = lobes.new_sample(), lobes.point2(sample2)
-        has_r, has_t = self.enabled(ctx)
-        if not (has_r or has_t):
+        enabled = self.enabled(ctx)
+        if not (enabled[0] or enabled[1]):
             return bs, mi.Spectrum(0.0)
         wi = si.wi
-        cos_i = wi.z
-        active = active & (cos_i != 0.0)
+        active = active & (wi.z != 0.0)
         if lobes.none(active):
             return bs, mi.Spectrum(0.0)
+        radiance = ctx.mode == mi.TransportMode.Radiance
+        if self.albedos is not None:
+            return self._sample_compensated(si, sample1, sample2, active, enabled, radiance,
+                                            bs)
+        wo, active = self._sample_microfacet(si, wi, sample1, sample2, active, enabled)
+        if lobes.none(active):
+            return bs, mi.Spectrum(0.0)
+        self._fill(bs, wi, wo)
+        weight, bs.pdf = self._terms(si, wi, wo, active, enabled, radiance, weight=True)
+        return bs, dr.select(active, lobes.depolarize(weight), 0.0)
+
+    def _sample_microfacet(self, si, wi, sample1, sample2, active, enabled):
+        """(ωo, active): a microfacet normal, reflected about with probability F (``sample1``)
+        when both lobes are enabled, else refracted through; not active where that fails."""
+        has_r, has_t = enabled
+        cos_i = wi.z
         # the microfacet normal, seen from ωi turned to the normal's side
         up = dr.select(cos_i < 0.0, -1.0, 1.0)
         m = self._sample_normal(si, mi.Vector3f(wi.x * up, wi.y * up, wi.z * up), active,
@@ -77,29 +116,25 @@ class DielectricLobe:
         cos_im = vector.dot(wi, m)
         # a normal drawn from D·cos may face away from ωi: no sample (as G1(ωi) = 0 there)
         active = active & (cos_im * cos_i > 0.0)
-        if lobes.none(active):
-            return bs, mi.Spectrum(0.0)
-        F, cos_t, eta_it, eta_ti = fresnel.dielectric(cos_im, self.eta)
-        # the lobe: reflect with probability F when both are enabled
+        F, cos_t, _, eta_ti = fresnel.dielectric(cos_im, self.eta)
         pick_r = (sample1 <= F) if (has_r and has_t) else has_r
-        bs.wo = wo = lobes.choose(pick_r, lambda: vector.reflect(wi, m),
-                                  lambda: vector.refract(wi, m, cos_t, eta_ti))
-        bs.eta = dr.select(pick_r, 1.0, eta_it)
-        bs.sampled_component = dr.select(pick_r, mi.UInt32(0), mi.UInt32(1))
-        bs.sampled_type = dr.select(pick_r, mi.UInt32(lobes.flag("GlossyReflection")),
-                                    mi.UInt32(lobes.flag("GlossyTransmission")))
-        # the terms at ωo as stored, so that bs.pdf = pdf(bs.wo); a reflection that left
-        # below the surface (or a refraction above it) is no sample, nor is a refraction that
-        # float32 cannot represent (for η ≳ 100 at grazing facets, Snell's vector form loses
-        # the unit length to cancellation)
+        wo = lobes.choose(pick_r, lambda: vector.reflect(wi, m),
+                          lambda: vector.refract(wi, m, cos_t, eta_ti))
+        # a reflection that left below the surface (or a refraction above it) is no sample,
+        # nor is a refraction that float32 cannot represent (for η ≳ 100 at grazing facets,
+        # Snell's vector form loses the unit length to cancellation)
         same_side = cos_i * wo.z > 0.0
         unit = dr.abs(vector.dot(wo, wo) - 1.0) < 1e-3
-        active = active & dr.select(pick_r, same_side, (cos_i * wo.z < 0.0) & unit)
-        if lobes.none(active):
-            return bs, mi.Spectrum(0.0)
-        weight, bs.pdf = self._terms(si, wi, wo, active, (has_r, has_t),
-                                     ctx.mode == mi.TransportMode.Radiance, weight=True)
-        return bs, dr.select(active, lobes.depolarize(weight), 0.0)
+        return wo, active & dr.select(pick_r, same_side, (cos_i * wo.z < 0.0) & unit)
+
+    def _fill(self, bs, wi, wo):
+        """``bs``'s direction, relative index, component and type for ωo."""
+        reflect = wi.z * wo.z > 0.0
+        bs.wo = wo
+        bs.eta = dr.select(reflect, 1.0, dr.select(wi.z > 0.0, self.eta, self.inv_eta))
+        bs.sampled_component = dr.select(reflect, mi.UInt32(0), mi.UInt32(1))
+        bs.sampled_type = dr.select(reflect, mi.UInt32(lobes.flag("GlossyReflection")),
+                                    mi.UInt32(lobes.flag("GlossyTransmission")))
 
     def _sample_normal(self, si, wi_up, active, sample2):
         """A microfacet normal for ωi turned up (``wi_up``): visible normals, or D·cosθ of the
@@ -172,6 +207,70 @@ class DielectricLobe:
                 lambda: dr.abs((1.0 - F) * D * G * eta * eta * cos_im * cos_om /
                                dr.maximum(cos_i * dr.square(cos_im + eta * cos_om), -1e30)))
         return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
+
+    def _side_albedos(self, si, mu, above, active):
+        """(E(μ), E_avg) of the side ``above`` (a mask) at the roughness at ``si``."""
+        distr = lambda: self.distribution(si, active)  # noqa: E731 (read only for textures)
+        e_above, avg_above = self.albedos[0](mu, distr)
+        e_below, avg_below = self.albedos[1](mu, distr)
+        return (dr.select(above, e_above, e_below), dr.select(above, avg_above, avg_below))
+
+    def _at_wi(self, si, wi, active, enabled):
+        """What the compensation needs of ωi alone: (the probability of the microfacet
+        sampler, E(μi); of a cosine sample, the probability that it reflects; the lobe's
+        (1 − E(μi))/π times its reflected share, and times its refracted share)."""
+        has_r, has_t = enabled
+        above = wi.z > 0.0
+        distr = lambda: self.distribution(si, active)  # noqa: E731
+        avg_above, avg_below = (a.average(distr) for a in self.albedos)
+        x_above, x_below = multiscatter.transmitted_shares(self.t_above, self.eta, avg_above,
+                                                           avg_below)
+        x = dr.select(above, x_above, x_below)
+        e_i = self._side_albedos(si, dr.abs(wi.z), above, active)[0]
+        missing = dr.maximum(1.0 - e_i, 0.0) * dr.inv_pi
+        q_reflect = (1.0 - x) if (has_r and has_t) else (1.0 if has_r else 0.0)
+        return dr.clip(e_i, 0.0, 1.0), q_reflect, missing * (1.0 - x), missing * x
+
+    def _compensated(self, si, wi, wo, active, enabled, radiance, value_ss, pdf_ss, at_wi=None):
+        """(f·|cosθo|, pdf) of the single scattering (``value_ss``, ``pdf_ss``) plus the
+        compensation lobe, and the mixture density of :meth:`sample`."""
+        has_r, has_t = enabled
+        p_ss, q_reflect, reflected, refracted = \
+            self._at_wi(si, wi, active, enabled) if at_wi is None else at_wi
+        reflect = wi.z * wo.z > 0.0
+        active = active & (wi.z != 0.0) & (wo.z != 0.0)
+        if not (has_r and has_t):
+            active = active & (reflect if has_r else ~reflect)
+        abs_cos_o = dr.abs(wo.z)
+        e_o, avg_o = self._side_albedos(si, abs_cos_o, wo.z > 0.0, active)
+        shape = dr.maximum(1.0 - e_o, 0.0) * abs_cos_o / dr.maximum(1.0 - avg_o, 1e-7)
+        eta = dr.select(wi.z > 0.0, self.eta, self.inv_eta)
+        value = lobes.choose(
+            reflect, lambda: self.specular.eval(si, active) * (reflected * shape),
+            lambda: self._refraction_factor(si, eta, radiance, active) * (refracted * shape))
+        pdf = dr.select(reflect, q_reflect, 1.0 - q_reflect) * abs_cos_o * dr.inv_pi
+        return (value_ss + dr.select(active, value, 0.0),
+                mixture.pdf(p_ss, pdf_ss, dr.select(active, pdf, 0.0)))
+
+    def _sample_compensated(self, si, sample1, sample2, active, enabled, radiance, bs):
+        """:meth:`sample` with the compensation: the microfacet sampler with probability E(μi),
+        else the cosine hemisphere, reflected with the compensation's reflected share."""
+        wi = si.wi
+        at_wi = self._at_wi(si, wi, active, enabled)
+        p_ss, q_reflect = at_wi[0], at_wi[1]
+        pick = sample1 < p_ss
+        wo_ss, valid = self._sample_microfacet(si, wi, mixture.rescale(sample1, p_ss),
+                                               sample2, active, enabled)
+        u = (sample1 - p_ss) / dr.maximum(1.0 - p_ss, 1e-30)
+        wo_c = mi.warp.square_to_cosine_hemisphere(sample2)
+        side = dr.select((u < q_reflect) == (wi.z > 0.0), 1.0, -1.0)
+        wo = dr.select(pick, wo_ss, mi.Vector3f(wo_c.x, wo_c.y, wo_c.z * side))
+        active = active & dr.select(pick, valid, True)
+        self._fill(bs, wi, wo)
+        value, pdf_ss = self._terms(si, wi, wo, active, enabled, radiance)
+        value, bs.pdf = self._compensated(si, wi, wo, active, enabled, radiance, value,
+                                          pdf_ss, at_wi)
+        return bs, lobes.weight(lobes.depolarize(value), bs.pdf, active)
 
     def _refraction_factor(self, si, eta, radiance, active):
         """kt, over η² in radiance transport (Veach 1997, §5.2: the radiance of refracted light

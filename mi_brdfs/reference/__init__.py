@@ -21,7 +21,7 @@ import numpy as np
 from .ashikhmin import Ashikhmin
 from .cooktorrance import CookTorrance, RoughDielectric
 from .lafortune import Lafortune
-from .multiscatter import Compensated
+from .multiscatter import Compensated, CompensatedDielectric
 from .lambert import Lambert
 from .orennayar import OrenNayar
 from .phong import Phong
@@ -117,8 +117,9 @@ def _rough_dielectric(spec):
     if not all(isinstance(a, (int, float)) for a in (*numbers, eta)) or specular is None \
             or transmittance is None:
         return None
-    return RoughDielectric(alpha, spec.get("distribution", "beckmann"), eta, specular,
-                           transmittance)
+    model = RoughDielectric(alpha, spec.get("distribution", "beckmann"), eta, specular,
+                            transmittance)
+    return CompensatedDielectric(model) if spec.get("multiscatter") else model
 
 
 def _cooktorrance(spec):

@@ -60,14 +60,63 @@ def table_key(kind: str, shadowing: str) -> str:
 
 @lru_cache(maxsize=None)
 def load_tables(path: str = str(TABLE_PATH)) -> dict:
-    """The tables as float64 NumPy arrays: ``E[key]`` (n_alpha, n_mu), ``E_avg[key]``
-    (n_alpha,) and the scalar ``alpha_max``."""
+    """The tables as float64 NumPy arrays: the conductor's ``E[key]`` (n_alpha, n_mu) and
+    ``E_avg[key]`` (n_alpha,), the dielectric's ``ET[key]`` (n_eta, n_alpha, n_mu) and
+    ``ET_avg[key]`` (n_eta, n_alpha), the scalars ``alpha_max`` and ``eta_max``."""
     with np.load(path) as data:
-        keys = [k[len("E_"):] for k in data.files if k.startswith("E_") and
-                not k.startswith("E_avg_")]
-        return {"E": {k: np.asarray(data["E_" + k], np.float64) for k in keys},
-                "E_avg": {k: np.asarray(data["E_avg_" + k], np.float64) for k in keys},
-                "alpha_max": float(data["alpha_max"])}
+        out = {"alpha_max": float(data["alpha_max"]), "eta_max": float(data["eta_max"])}
+        for name in ("E", "ET"):
+            keys = [k[len(name) + 1:] for k in data.files if k.startswith(name + "_") and
+                    not k.startswith(name + "_avg_")]
+            out[name] = {k: np.asarray(data[f"{name}_{k}"], np.float64) for k in keys}
+            out[name + "_avg"] = {k: np.asarray(data[f"{name}_avg_{k}"], np.float64)
+                                  for k in keys}
+        return out
+
+
+def dielectric_tables(kind: str, eta: float) -> tuple["Table", "Table"]:
+    """The :class:`Table` pair of :func:`dielectric_arrays`, in the current variant."""
+    return tuple(Table(kind, "smith", E, E_avg) for E, E_avg in dielectric_arrays(kind, eta))
+
+
+def dielectric_arrays(kind: str, eta: float) -> tuple[tuple, tuple]:
+    """
+    The albedo tables E_R+T(μ, α) of the rough dielectric (Smith masking) with relative index
+    ``eta`` = η_int/η_ext and their averages E_avg(α), as NumPy arrays: ((E, E_avg) lit from
+    above, (E, E_avg) lit from below), the file's E(μ, α, η) at η and at 1/η (from below the
+    relative index inverts), linear in log η, once per material. Beyond [1/η_max, η_max]
+    the tables hold their last value.
+    """
+    tables = load_tables()
+    key, eta_max = table_key(kind, "smith"), tables["eta_max"]
+    E, E_avg = tables["ET"][key], tables["ET_avg"][key]
+
+    def at(relative):
+        s = np.clip((np.log(relative) / np.log(eta_max) + 1.0) / 2.0, 0.0, 1.0) * \
+            (len(E) - 1)
+        j = min(int(s), len(E) - 2)
+        t = s - j
+        return ((1.0 - t) * E[j] + t * E[j + 1], (1.0 - t) * E_avg[j] + t * E_avg[j + 1])
+
+    return at(eta), at(1.0 / eta)
+
+
+def transmitted_shares(t_above, eta, e_avg_above, e_avg_below):
+    r"""
+    (x_above, x_below): the share of the dielectric's compensation lobe that crosses the
+    interface, lit from above and from below. Kulla & Conty 2017 split the missing energy
+    1 − E(μi) between reflection and refraction so that the pair stays reciprocal across the
+    interface; here detailed balance between the sides (radiance η² times larger below, for
+    η = η_below/η_above) asks for x_above (1 − E_avg,above) = η² x_below (1 − E_avg,below).
+    The shares are x = T_avg·K/(1 − E_avg) with the interface's average transmittance seen
+    from each side, T_avg,above = 1 − F_avg(η) (``t_above``) and T_avg,below = T_avg,above/η²
+    (the same balance for a smooth interface, so exact here by construction), and
+    K = min(1 − E_avg,above, 1 − E_avg,below): then both x ≤ T_avg ≤ 1.
+    """
+    missing_above = dr.maximum(1.0 - e_avg_above, 1e-7)
+    missing_below = dr.maximum(1.0 - e_avg_below, 1e-7)
+    k = dr.minimum(missing_above, missing_below)
+    return t_above * k / missing_above, t_above / dr.square(eta) * k / missing_below
 
 
 def _gather(table, index):
@@ -131,6 +180,44 @@ class Table:
         return dr.lerp(_gather(self._E_avg, j), _gather(self._E_avg, j + 1), ty)
 
 
+class Albedos:
+    """
+    E(μ) and E_avg of one :class:`Table` at a surface's roughness: the table's :class:`Row` of
+    a uniform α (interpolated in α once), else the table itself, at the equivalent isotropic
+    roughness of each point. ``alpha_u`` and ``alpha_v`` are the surface's roughness textures
+    (the same one when isotropic).
+    """
+
+    def __init__(self, table: Table, alpha_u, alpha_v):
+        from .microfacet import ALPHA_MIN
+
+        self.table, self.row = table, None
+        if not (alpha_u.is_spatially_varying() or alpha_v.is_spatially_varying()):
+            au = dr.maximum(alpha_u.mean(), ALPHA_MIN)
+            av = dr.maximum(alpha_v.mean(), ALPHA_MIN)
+            self.row = table.at(au if alpha_v is alpha_u else dr.sqrt(au * av))
+
+    def __call__(self, mu, distr):
+        """(E(μ), E_avg) at the roughness of ``distr`` (a :class:`~.microfacet.Distribution`,
+        or a callable that makes it: only read when α varies)."""
+        if self.row is not None:
+            return self.row.albedo(mu), self.row.average
+        alpha = equivalent_alpha(distr() if callable(distr) else distr)
+        return self.table.albedo(mu, alpha), self.table.average_albedo(alpha)
+
+    def average(self, distr):
+        """E_avg alone, at the roughness of ``distr`` (as :meth:`__call__`)."""
+        if self.row is not None:
+            return self.row.average
+        return self.table.average_albedo(equivalent_alpha(distr() if callable(distr) else distr))
+
+
+def equivalent_alpha(distr):
+    """The isotropic roughness of the albedo tables: α, or sqrt(αu·αv) when anisotropic (the
+    roughness of the same D(0); its error is measured in the validation report)."""
+    return dr.sqrt(distr.alpha_u * distr.alpha_v) if distr.anisotropic else distr.alpha_u
+
+
 class Row:
     """E(μ) at one roughness (:meth:`Table.at`): ``albedo(mu)`` linear in sqrt μ, and the
     roughness's ``average`` E_avg."""
@@ -156,7 +243,7 @@ def multiple_fresnel(f_avg, e_avg):
     return dr.square(f_avg) * e_avg / dr.maximum(1.0 - f_avg * (1.0 - e_avg), _TINY)
 
 
-def fresnel_average(eta, k):
+def fresnel_average(eta, k, nodes: int = 5):
     r"""
     F_avg = 2∫₀¹ F(μ) μ dμ of :func:`mi_brdfs.scattering.fresnel.exact`, per channel, by a
     5-node Gauss-Legendre rule: within 7e-5 of 3000 nodes for conductors and dielectrics, which
@@ -164,13 +251,15 @@ def fresnel_average(eta, k):
     Fresnel terms per channel and call instead of 5). Where k = 0 and η < 1, F = 1 below the
     critical cosine μc = sqrt(1 − η²) (total internal reflection), which gives μc² in closed
     form, and F falls like sqrt(μ − μc) above it: the rule runs there in t with
-    μ = μc + (1 − μc) t³, which makes the integrand smooth.
+    μ = μc + (1 − μc) t³, which makes the integrand smooth. ``nodes`` > 5 where it is computed
+    once per material (the dielectric's η is one number): 32 give 1e-7.
     """
     tir = (k == 0.0) & (eta < 1.0)
     mu_c2 = dr.select(tir, dr.maximum(1.0 - dr.square(eta), 0.0), 0.0)
     mu_c = dr.sqrt(mu_c2)
     total = mu_c2
-    for x, w in zip(_GL_X, _GL_W):
+    gl_x, gl_w = (_GL_X, _GL_W) if nodes == 5 else np.polynomial.legendre.leggauss(nodes)
+    for x, w in zip(gl_x, gl_w):
         t = 0.5 * (float(x) + 1.0)
         mu = mu_c + (1.0 - mu_c) * dr.select(tir, t * t * t, t)
         jacobian = (1.0 - mu_c) * dr.select(tir, 3.0 * t * t, 1.0)

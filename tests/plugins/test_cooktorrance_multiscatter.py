@@ -86,7 +86,7 @@ def test03b_a_textured_roughness_takes_the_2d_lookup(variants_rgb, np_rng):
     wi, wo = random_directions(np_rng, n, lower=False), random_directions(np_rng, n, lower=False)
     a = eval_pdf(mi.load_dict(dict(base, alpha=0.55)), wi, wo)
     b = eval_pdf(mi.load_dict(textured), wi, wo)
-    assert mi.load_dict(textured)._lobe.row is None
+    assert mi.load_dict(textured)._lobe.albedos.row is None
     np.testing.assert_allclose(b[0], a[0], rtol=2e-5, atol=1e-7)
     np.testing.assert_allclose(b[1], a[1], rtol=2e-5, atol=1e-7)
 
@@ -149,7 +149,7 @@ def test06_a_table_off_by_one_percent_fails_the_furnace(variant_llvm_ad_rgb):
     lobe = bsdf._lobe
     lobe.table = multiscatter.Table("ggx", "smith", tables["E"][key] * 0.99,
                                     tables["E_avg"][key] * 0.99)
-    lobe.row = lobe.table.at(mi.Float(1.0))
+    lobe.albedos = multiscatter.Albedos(lobe.table, lobe.alpha_u, lobe.alpha_v)
     mean, err = checks.albedo_sampled(bsdf, math.radians(85.0), n=400_000)
     assert abs(mean[0] - 1.0) > 2e-3 + 4 * err[0], (mean, err)
 
@@ -266,10 +266,3 @@ def test14_gradient_through_alpha(variant_llvm_ad_rgb):
 
     h = 1e-3
     assert grad == pytest.approx((at(0.6 + h) - at(0.6 - h)) / (2 * h), rel=2e-2)
-
-
-def test15_not_with_transmission():
-    """One line naming the plugin, the parameter and what is allowed."""
-    mi.set_variant("scalar_rgb")
-    with pytest.raises(Exception, match="cooktorrance.*multiscatter.*transmission"):
-        mi.load_dict({"type": CT, "multiscatter": True, "transmission": True})
