@@ -21,6 +21,7 @@ from ..checks import batch, furnace
 from ..plots import pyplot, save_figure
 from ..reference.quadrature import direction, sphere_grid
 from .core import Context, Row, Section, image, md_table
+from . import multiscatter_dielectric as dielectric
 from .multiscatter_walk import (GOLD, KINDS, LOBE_PATHS, PHI_BINS, THETA_EDGES, closed_form,
                                 gold, lobes, spec, walk_albedo)
 
@@ -44,28 +45,29 @@ UNBIASED = {("beckmann", "smith"): {"sample_visible": False}}
 STRATA, BLOCK, REPLICATES = (250, 100), 16, (256, 16)
 
 
-def _stratified_mean(bsdf, wi, m: int, rng) -> float:
+def _stratified_mean(bsdf, wi, m: int, rng, bsdf_ctx=None) -> float:
     """One mean ``sample()`` weight over a jittered m × m grid of the 2D sample and stratified,
     shuffled 1D samples (channel 0)."""
     n, i = m * m, np.arange(m * m)
     u2 = np.stack([(i // m + rng.random(n)) / m, (i % m + rng.random(n)) / m], axis=1)
     u1 = (rng.permutation(n) + rng.random(n)) / n
-    return float(batch.sample(bsdf, wi, u1, u2).weight[:, 0].mean())
+    return float(batch.sample(bsdf, wi, u1, u2, bsdf_ctx).weight[:, 0].mean())
 
 
 def sampled(ctx: Context, sp: dict, theta: float, phi: float = 0.0, seed=0,
-            precise: bool = True) -> tuple[float, float, int]:
+            precise: bool = True, bsdf_ctx=None) -> tuple[float, float, int]:
     """
-    E(θ, φ) (degrees) as the mean ``sample()`` weight: (mean, standard error, samples). Blocks
-    of BLOCK independent stratified replicates, their spread the standard error; ``precise``
-    adds blocks until 4 SE ≤ TARGET/4 or REPLICATES replicates.
+    E(θ, φ) (degrees) as the mean ``sample()`` weight (in the ``mi.BSDFContext``
+    ``bsdf_ctx``, default radiance): (mean, standard error, samples). Blocks of BLOCK
+    independent stratified replicates, their spread the standard error; ``precise`` adds
+    blocks until 4 SE ≤ TARGET/4 or REPLICATES replicates.
     """
     bsdf, rng = load_bsdf(sp), np.random.default_rng(seed)
     wi = direction(math.radians(theta), math.radians(phi))
     m, most = ctx.n(*STRATA), ctx.n(*REPLICATES) if precise else BLOCK
     means: list[float] = []
     while True:
-        means += [_stratified_mean(bsdf, wi, m, rng) for _ in range(BLOCK)]
+        means += [_stratified_mean(bsdf, wi, m, rng, bsdf_ctx) for _ in range(BLOCK)]
         se = float(np.std(means, ddof=1) / math.sqrt(len(means)))
         if 4 * se <= TARGET / 4 or len(means) >= most:
             return float(np.mean(means)), se, len(means) * m * m
@@ -363,7 +365,19 @@ def section(ctx: Context) -> Section:
     t_render, f_render = render(ctx, s)
     s.markdown = _markdown(ctx, s, t_furnace, t_single, f_furnace, t_vcavity, t_aniso,
                            t_lobes, f_lobes, t_gold, t_render, f_render)
+    s.markdown += "\n\n" + "\n".join(_dielectric(ctx, s))
     return s
+
+
+def _dielectric(ctx: Context, s: Section) -> list:
+    """The dielectric's rows and markdown (:mod:`~mi_brdfs.campaign.multiscatter_dielectric`)."""
+    grid = dielectric.furnace_grid(ctx, sampled)
+    dielectric.furnace_rows(grid, s)
+    t_furnace, t_share = dielectric.furnace_table(grid), dielectric.share_table(grid, s)
+    t_sweep = dielectric.eta_sweep(ctx, s)
+    t_render, out = dielectric.render(ctx, s, _regions)
+    return dielectric.markdown(ctx, s.values, t_furnace, t_share, t_sweep, t_render,
+                               dielectric.render_figure(ctx, out), image)
 
 
 def _markdown(ctx: Context, s: Section, t_furnace, t_single, f_furnace, t_vcavity, t_aniso,

@@ -361,7 +361,7 @@ def _add_tables(sub) -> None:
                     "single-scattering lobe (F = 1) for each distribution and masking, and "
                     "E(mu, alpha, eta) of its rough dielectric (transmission = true), the "
                     "tables of its energy compensation (multiscatter = true), from the plugin "
-                    "itself, deterministically (about 10 minutes on 2 cores).")
+                    "itself, deterministically (a few minutes).")
     t.add_argument("-o", "--out", type=_output(".npz"), metavar="FILE.npz",
                    help="where to write them (default: the package's own table file)")
     t.add_argument("--samples", type=_number(int, "--samples", lambda v: v >= 4, "an integer "

@@ -9,11 +9,12 @@ import re
 
 from mi_brdfs import campaign
 from mi_brdfs.campaign import multiscatter
+from mi_brdfs.campaign import multiscatter_dielectric as dielectric
 from mi_brdfs.campaign.core import Context, Section
 from mi_brdfs.scattering import multiscatter as tables
 
 FIGURES = ("multiscatter_furnace.png", "multiscatter_lobes.png",
-           "multiscatter_furnace_render.png")
+           "multiscatter_furnace_render.png", "multiscatter_dielectric_render.png")
 
 
 def _rows(section, plugin_part: str, check_part: str) -> list:
@@ -46,10 +47,19 @@ def test01_quick_section_rows_values_and_figures(variant_llvm_ad_rgb, tmp_path):
     # the render: compensated sphere at 1, the single-scattering one = roughconductor
     render = _rows(s, "(ggx smith, α = 1)", "white furnace render")
     assert len(render) == 3 and all(r.passed for r in render), [r.result for r in render]
+    # the dielectric: the furnace from both sides, the walk's total, the η sweep, the render
+    for kind in ("ggx", "beckmann"):
+        rows = _rows(s, f"transmission multiscatter {kind}", "white furnace in importance")
+        assert len(rows) == 2 and all(r.passed for r in rows), [r.result for r in rows]
+        assert _rows(s, f"transmission multiscatter {kind}", "random walk")[0].passed
+    assert len(_rows(s, "transmission multiscatter", "reflected share")) == 2
+    assert _rows(s, "transmission multiscatter", "over η")[0].passed
+    assert _rows(s, "transmission multiscatter (ggx", "every path")[0].passed
     assert not [r for r in s.rows if not r.ok]
     for key in ("multiscatter: worst ggx smith closed form", "multiscatter: lobe L1 beckmann",
                 "multiscatter: gold worst relative", "multiscatter: render cooktorrance "
-                "multiscatter"):
+                "multiscatter", "multiscatter dielectric: worst ggx",
+                "multiscatter dielectric: render"):
         assert key in s.values
     for name in FIGURES:
         assert (tmp_path / "figures" / name).stat().st_size > 1000, name
@@ -74,3 +84,17 @@ def test02_tables_scaled_by_098_fail_the_furnace(variant_llvm_ad_rgb, tmp_path, 
     assert not _rows(s, "ggx smith", "mean sample() weight")[0].passed
     assert not _rows(s, "ggx smith", "eval integrated")[0].passed
     assert _rows(s, "ggx smith", "float64 closed form")[0].passed
+
+
+def test03_dielectric_tables_scaled_by_098_fail_the_furnace(variant_llvm_ad_rgb, tmp_path,
+                                                            monkeypatch):
+    """The dielectric's tables scaled by 0.98 in the plugin: its sample() rows fail, the
+    closed form (the reference reads the file) passes."""
+    shipped = tables.dielectric_arrays
+    monkeypatch.setattr(tables, "dielectric_arrays", lambda kind, eta: tuple(
+        (0.98 * E, 0.98 * E_avg) for E, E_avg in shipped(kind, eta)))
+    ctx = Context(tmp_path, quick=True)
+    s = Section("broken")
+    dielectric.furnace_rows(dielectric.furnace_grid(ctx, multiscatter.sampled), s)
+    assert not any(r.passed for r in _rows(s, "transmission multiscatter", "mean sample()"))
+    assert all(r.passed for r in _rows(s, "transmission multiscatter", "closed form"))
