@@ -541,3 +541,28 @@ def test12_multiscatter_can_be_dropped(variant_llvm_ad_rgb):
     assert np.all(single <= both) and np.any(single < both)
     rough, note = got["roughconductor"]
     assert "multiscatter" not in _params_of(rough) and note.startswith("single scattering")
+
+
+GLASS_MULTISCATTER = b"""<scene version="3.0.0">
+    <bsdf type="cooktorrance" id="glass">
+        <boolean name="transmission" value="true"/>
+        <boolean name="multiscatter" value="true"/>
+        <float name="eta" value="1.5"/>
+        <float name="alpha" value="0.7"/>
+    </bsdf>
+</scene>"""
+
+
+def test13_dielectric_multiscatter_can_be_dropped(variant_llvm_ad_rgb):
+    """A compensated rough glass gets ``multiscatter=false`` and roughdielectric, said to be
+    single scattering, which loads (the compensation's parameter left out)."""
+    from mi_brdfs.bsdfspec import load_bsdf
+    from mi_brdfs.simplify import candidates_for
+
+    (material,), _ = scene_bsdfs(GLASS_MULTISCATTER)
+    got = {label: (element, note) for label, _, element, note in
+           candidates_for(material, {}, lambda *job: "fit skipped")}
+    assert _params_of(got["multiscatter=false"][0])["multiscatter"] == "false"
+    rough, note = got["roughdielectric"]
+    assert "multiscatter" not in _params_of(rough) and note.startswith("single scattering")
+    load_bsdf(ET.tostring(rough, encoding="unicode"))

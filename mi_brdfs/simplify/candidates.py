@@ -186,14 +186,17 @@ def _to_roughdielectric(element, p) -> tuple | None:
     """cooktorrance transmission=true → roughdielectric (same α, distribution, indices)."""
     if p.get("fresnel", "exact") != "exact":
         return None
-    out = _drop(_retyped(element, "roughdielectric"), "transmission", "shadowing", "fresnel")
+    out = _drop(_retyped(element, "roughdielectric"), "transmission", "shadowing", "fresnel",
+                "multiscatter")
     if "eta" in p:
         if not isinstance(p["eta"], float):
             return None
         _drop(out, "eta", "k")
         _set(out, "float", "int_ior", p["eta"])
         _set(out, "float", "ext_ior", 1.0)
-    return ("roughdielectric", "built-in", out, "the same model (Walter et al. 2007)")
+    note = "single scattering (no energy compensation), Walter et al. 2007" \
+        if p.get("multiscatter") is True else "the same model (Walter et al. 2007)"
+    return ("roughdielectric", "built-in", out, note)
 
 
 def _switches(element, p, kind) -> list:
