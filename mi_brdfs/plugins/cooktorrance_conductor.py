@@ -53,6 +53,19 @@ class ConductorLobe:
         #: E(μ) and E_avg at the surface's roughness (None without compensation)
         self.albedos = None if table is None else \
             multiscatter.Albedos(table, alpha_u, alpha_v)
+        #: F_avg where the index is the same everywhere and for every wavelength (no texture,
+        #: not a spectral variant): a constant of the material, computed once, not per lookup
+        self.f_avg = None
+        if table is not None and fresnel != "none" and not mi.is_spectral and \
+                not (eta.is_spatially_varying() or k.is_spatially_varying()):
+            self.f_avg = self._fresnel_average(dr.zeros(mi.SurfaceInteraction3f), True)
+            dr.make_opaque(self.f_avg)
+        #: F_ms/(π (1 − E_avg)) where the roughness and F_avg are constants as well
+        self.ms_factor = None
+        if self.albedos is not None and self.albedos.row is not None and \
+                (fresnel == "none" or self.f_avg is not None):
+            self.ms_factor = self._ms_factor(self.f_avg, self.albedos.row.average)
+            dr.make_opaque(self.ms_factor)
 
     def distribution(self, si, active) -> microfacet.Distribution:
         """The microfacet distribution at ``si``."""
@@ -168,14 +181,27 @@ class ConductorLobe:
         lobe."""
         e_i, e_avg = self._albedos(si, wi.z, active)
         ks = self.specular.eval(si, active)
-        scale, ks_f_avg = ks * multiscatter.lobe(e_i, 0.0, e_avg), ks
+        f_avg = None
         if self.fresnel != "none":
-            eta, k = self.eta.eval(si, active), self.k.eval(si, active)
-            f_avg = multiscatter.fresnel_average(eta, k) if self.fresnel == "exact" else \
-                multiscatter.schlick_average(fresnel.r0(eta, k))
-            scale = scale * multiscatter.multiple_fresnel(f_avg, e_avg)
-            ks_f_avg = ks * f_avg
-        return scale, e_i, e_avg, ks_f_avg
+            f_avg = self.f_avg if self.f_avg is not None else \
+                self._fresnel_average(si, active)
+        factor = self.ms_factor if self.ms_factor is not None else \
+            self._ms_factor(f_avg, e_avg)
+        scale = ks * (factor * dr.maximum(1.0 - e_i, 0.0))
+        return scale, e_i, e_avg, ks if f_avg is None else ks * f_avg
+
+    @staticmethod
+    def _ms_factor(f_avg, e_avg):
+        """F_ms/(π (1 − E_avg)): the compensation lobe's factor besides ks and the (1 − E)."""
+        factor = multiscatter.lobe(0.0, 0.0, e_avg)
+        return factor if f_avg is None else factor * multiscatter.multiple_fresnel(f_avg, e_avg)
+
+    def _fresnel_average(self, si, active):
+        """F_avg of the Fresnel term at ``si``, per channel."""
+        eta, k = self.eta.eval(si, active), self.k.eval(si, active)
+        if self.fresnel == "exact":
+            return multiscatter.fresnel_average(eta, k)
+        return multiscatter.schlick_average(fresnel.r0(eta, k))
 
     def _sample_microfacet(self, si, wi, sample1, sample2, active, bs):
         """Fill ``bs`` from the microfacet lobe alone; returns the weight in closed form."""
