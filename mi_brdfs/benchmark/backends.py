@@ -94,7 +94,7 @@ PAIRS = [
 
 def jit_ratios(ctx: Context, s: Section, pairs=PAIRS) -> list:
     """JIT: mi.render of each pair, plugin vs built-in, per sample; first renders apart."""
-    res, spp, repeats = ctx.n(256, 64), ctx.n(64, 8), ctx.n(15, 3)
+    res, spp, repeats = ctx.n(256, 64), ctx.n(64, 8), ctx.n(15, 2)
     table = []
     for pair in pairs:
         scenes = {k: load_scene(pair.scene, dict(d, res=str(res))) for k, d in

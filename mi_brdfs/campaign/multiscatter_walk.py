@@ -38,7 +38,7 @@ LOBE_ALPHAS, LOBE_THETAS = (0.5, 1.0), (0.0, 60.0, 80.0)
 THETA_EDGES = tuple(range(0, 91, 5))
 PHI_BINS = 12
 #: Paths of the walk per lobe (full, quick).
-LOBE_PATHS = (1_000_000, 100_000)
+LOBE_PATHS = (1_000_000, 50_000)
 #: The coloured albedo: roughnesses and incident angles (degrees).
 GOLD_ALPHAS, GOLD_THETAS = (0.5, 1.0), (0.0, 60.0, 80.0)
 
@@ -217,7 +217,7 @@ def gold(ctx: Context, s: Section) -> str:
     Fresnel-weighted total, per channel; and their parts, single and multiple."""
     alphas, thetas = ctx.n(GOLD_ALPHAS, GOLD_ALPHAS[-1:]), ctx.n(GOLD_THETAS, (60.0,))
     ior = np.array(GOLD[0]) + 1j * np.array(GOLD[1])
-    n_paths = ctx.n(400_000, 50_000)
+    n_paths = ctx.n(400_000, 20_000)
     rows, worst = [], (0.0, "")
     for i, kind in enumerate(KINDS):
         for j, alpha in enumerate(alphas):

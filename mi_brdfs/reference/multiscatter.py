@@ -163,13 +163,17 @@ class CompensatedDielectric:
         return self.base.brdf(wi, wo, radiance=radiance) + self.lobe(wi, wo, radiance)
 
     def albedo(self, theta: float, radiance: bool = False, **kwargs) -> np.ndarray:
-        """E(θ) of the single scattering (by quadrature) plus the lobe's, in closed form:
-        (1 − E_s(μi)) times (1 − x_s)·ks + x_s·kt (over η² in radiance transport)."""
+        """E(θ) of the single scattering (by quadrature) plus :meth:`lobe_albedo`."""
+        return self.base.albedo(theta, radiance=radiance, **kwargs) + \
+            self.lobe_albedo(theta, radiance)
+
+    def lobe_albedo(self, theta: float, radiance: bool = False) -> np.ndarray:
+        """The compensation's albedo in closed form: (1 − E_s(μi)) times (1 − x_s)·ks +
+        x_s·kt (over η² in radiance transport)."""
         mu = math.cos(theta)
         side = 0 if mu > 0 else 1
         e_i = float(self._albedo(side, np.array([mu]))[0])
         eta = self.base.eta if side == 0 else 1.0 / self.base.eta
         x = self.x[side]
-        ms = (1.0 - e_i) * ((1.0 - x) * self.base.specular +
-                            x * self.base.transmittance / (eta ** 2 if radiance else 1.0))
-        return self.base.albedo(theta, radiance=radiance, **kwargs) + ms
+        return (1.0 - e_i) * ((1.0 - x) * self.base.specular +
+                              x * self.base.transmittance / (eta ** 2 if radiance else 1.0))
