@@ -137,7 +137,7 @@ def plot(rows_by_pair, path) -> str:
 
 def section(ctx: Context) -> Section:
     s = Section("Error against time")
-    spps = [2 ** k for k in range(ctx.n(7, 3))]       # 1 … 64 (quick: 1 … 4)
+    spps = [2 ** k for k in range(ctx.n(7, 2))]       # 1 … 64 (quick: 1, 2)
     repeats = ctx.n(15, 2)
     reference_spp = 16 * spps[-1]
     pairs = PAIRS  # all of them in --quick too: the README quotes each
