@@ -60,6 +60,15 @@ PAIRS = [
     Pair("cooktorrance multiscatter on vs off", "metalbox",
          {"metal": "cooktorrance-multiscatter", "alpha": "0.6"},
          {"metal": "cooktorrance-smith", "alpha": "0.6"}, target=TARGET_MULTISCATTER),
+    # The dielectric's compensation: measured, in the rough glass sphere at α = 0.6, with and
+    # without it; once with every path (the compensated glass loses no energy, so Russian
+    # roulette keeps its paths longer), once with one bounce (max_depth 2: the cost per call).
+    Pair("cooktorrance transmission multiscatter on vs off", "glass",
+         {"glass": "cooktorrance-multiscatter", "alpha": "0.6"},
+         {"glass": "cooktorrance", "alpha": "0.6"}, target=False),
+    Pair("cooktorrance transmission multiscatter on vs off, one bounce", "glass",
+         {"glass": "cooktorrance-multiscatter", "alpha": "0.6", "max_depth": "2"},
+         {"glass": "cooktorrance", "alpha": "0.6", "max_depth": "2"}, target=False),
     # The models Mitsuba 3 lacks, against the built-in a user would otherwise take: Ward of
     # the same lobe widths as the brushed roughconductor, Oren-Nayar (σ = 0.2) for diffuse.
     Pair("ward (balanced) vs roughconductor, same widths", "brushed", {"metal": "ward"},

@@ -54,9 +54,9 @@ class DielectricLobe:
         #: transmittance from above, 1 − F_avg(η) (None without compensation)
         self.albedos = None
         if tables is not None:
-            self.albedos = tuple(multiscatter.Albedos(t, alpha_u, alpha_v) for t in tables)
-            self.t_above = 1.0 - multiscatter.fresnel_average(self.eta, 0.0, nodes=32)
-            dr.make_opaque(self.t_above)
+            t_above = 1.0 - multiscatter.fresnel_average(self.eta, 0.0, nodes=32)
+            dr.make_opaque(t_above)
+            self.albedos = multiscatter.TwoSided(tables, alpha_u, alpha_v, t_above, self.eta)
 
     def distribution(self, si, active) -> microfacet.Distribution:
         """The microfacet distribution at ``si``."""
@@ -210,10 +210,7 @@ class DielectricLobe:
 
     def _side_albedos(self, si, mu, above, active):
         """(E(μ), E_avg) of the side ``above`` (a mask) at the roughness at ``si``."""
-        distr = lambda: self.distribution(si, active)  # noqa: E731 (read only for textures)
-        e_above, avg_above = self.albedos[0](mu, distr)
-        e_below, avg_below = self.albedos[1](mu, distr)
-        return (dr.select(above, e_above, e_below), dr.select(above, avg_above, avg_below))
+        return self.albedos(mu, above, lambda: self.distribution(si, active))
 
     def _at_wi(self, si, wi, active, enabled):
         """What the compensation needs of ωi alone: (the probability of the microfacet
@@ -221,10 +218,7 @@ class DielectricLobe:
         (1 − E(μi))/π times its reflected share, and times its refracted share)."""
         has_r, has_t = enabled
         above = wi.z > 0.0
-        distr = lambda: self.distribution(si, active)  # noqa: E731
-        avg_above, avg_below = (a.average(distr) for a in self.albedos)
-        x_above, x_below = multiscatter.transmitted_shares(self.t_above, self.eta, avg_above,
-                                                           avg_below)
+        x_above, x_below = self.albedos.transmitted(lambda: self.distribution(si, active))
         x = dr.select(above, x_above, x_below)
         e_i = self._side_albedos(si, dr.abs(wi.z), above, active)[0]
         missing = dr.maximum(1.0 - e_i, 0.0) * dr.inv_pi

@@ -72,6 +72,9 @@ def test02_tables_from_below_are_the_inverse_index(variant_llvm_ad_rgb):
     mu, alpha = mi.Float(0.6), mi.Float(0.5)
     assert dr.allclose(below.albedo(mu, alpha), above.albedo(mu, alpha))
     spec = glass(multiscatter=False, alpha=0.5)
+    joined = mi.load_dict(glass(alpha=0.5))._lobe.albedos  # both sides in one row
+    e, _ = joined(mu, mi.Bool(False), None)
+    assert dr.allclose(e, below.albedo(mu, alpha))
     mean, err = checks.albedo_sampled(spec, math.pi - math.acos(0.6), n=200_000,
                                       ctx=mi.BSDFContext(IMPORTANCE))
     assert mean[0] == pytest.approx(below.albedo(mu, alpha)[0], abs=1e-3 + 4 * err[0])
@@ -124,7 +127,8 @@ def test05_a_table_off_by_one_percent_fails_the_furnace(variant_llvm_ad_rgb):
     lobe = bsdf._lobe
     scaled = [multiscatter.Table("ggx", "smith", E * 0.99, E_avg * 0.99)
               for E, E_avg in multiscatter.dielectric_arrays("ggx", ETA_NODE)]
-    lobe.albedos = tuple(multiscatter.Albedos(t, lobe.alpha_u, lobe.alpha_v) for t in scaled)
+    lobe.albedos = multiscatter.TwoSided(scaled, lobe.alpha_u, lobe.alpha_v,
+                                         lobe.albedos.t_above, lobe.eta)
     mean, err = checks.albedo_sampled(bsdf, math.radians(0.0), n=400_000,
                                       ctx=mi.BSDFContext(IMPORTANCE))
     assert abs(mean[0] - 1.0) > 2e-3 + 4 * err[0], (mean, err)
