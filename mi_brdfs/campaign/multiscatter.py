@@ -375,8 +375,9 @@ def _dielectric(ctx: Context, s: Section) -> list:
     dielectric.furnace_rows(grid, s)
     t_furnace, t_share = dielectric.furnace_table(grid), dielectric.share_table(grid, s)
     t_sweep = dielectric.eta_sweep(ctx, s)
+    t_aniso = dielectric.anisotropic(ctx, s, sampled)
     t_render, out = dielectric.render(ctx, s, _regions)
-    return dielectric.markdown(ctx, s.values, t_furnace, t_share, t_sweep, t_render,
+    return dielectric.markdown(ctx, s.values, t_furnace, t_share, t_sweep, t_aniso, t_render,
                                dielectric.render_figure(ctx, out), image)
 
 
