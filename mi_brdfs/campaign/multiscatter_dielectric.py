@@ -109,27 +109,24 @@ def furnace_rows(grid: dict, s: Section) -> None:
                           "to 1", f"min total {total:.6f}", "≥ 0.9999", total >= 0.9999))
 
 
+def _per_theta(grid: dict, cell) -> str:
+    """A table of ``cell(r)`` per (kind, α) × θ of the grid."""
+    thetas = sorted({t for _, _, t in grid})
+    rows = [(kind, f"{alpha:g}", *(cell(grid[(kind, alpha, t)]) for t in thetas))
+            for kind, alpha in dict.fromkeys((k, a) for k, a, _ in grid)]
+    return md_table(["distribution", "α", *(f"θ = {t:g}°" for t in thetas)], rows)
+
+
 def furnace_table(grid: dict) -> str:
     """Per (kind, α) × θ: single scattering / compensated − 1 (closed form, sample()) / walk
     order 1."""
-    thetas = sorted({t for _, _, t in grid})
-    rows = []
-    for kind, alpha in dict.fromkeys((k, a) for k, a, _ in grid):
-        rs = [grid[(kind, alpha, t)] for t in thetas]
-        rows.append((kind, f"{alpha:g}", *(f"{r['ss']:.3f} / {r['e'] - 1:+.1e}, "
-                                           f"{r['e_s'] - 1:+.1e} / {r['o1']:.3f}" for r in rs)))
-    return md_table(["distribution", "α", *(f"θ = {t:g}°" for t in thetas)], rows)
+    return _per_theta(grid, lambda r: f"{r['ss']:.3f} / {r['e'] - 1:+.1e}, "
+                                      f"{r['e_s'] - 1:+.1e} / {r['o1']:.3f}")
 
 
 def share_table(grid: dict, s: Section) -> str:
     """The reflected share of the multiple scattering: the compensation's 1 − x against the
     walk's orders ≥ 2, per (kind, α) × θ (measured, no target)."""
-    thetas = sorted({t for _, _, t in grid})
-    rows = []
-    for kind, alpha in dict.fromkeys((k, a) for k, a, _ in grid):
-        rs = [grid[(kind, alpha, t)] for t in thetas]
-        rows.append((kind, f"{alpha:g}", *(f"{r['share_r']:.2f} / {r['ms_r']:.2f} "
-                                           f"({r['ms']:.2f})" for r in rs)))
     for side, pick in (("outside", lambda t: t < 90.0), ("inside", lambda t: t > 90.0)):
         gaps = [(r["share_r"] - r["ms_r"], f"{k} α = {a:g}, θ = {t:g}°")
                 for (k, a, t), r in grid.items() if pick(t) and r["ms"] > 0.01]
@@ -141,7 +138,7 @@ def share_table(grid: dict, s: Section) -> str:
                               "reflected share of the compensation − the walk's orders ≥ 2 "
                               "(where they carry > 1 %)", f"{lo[0]:+.2f} ({lo[1]}) to "
                               f"{hi[0]:+.2f} ({hi[1]})", "measured (no target)", True))
-    return md_table(["distribution", "α", *(f"θ = {t:g}°" for t in thetas)], rows)
+    return _per_theta(grid, lambda r: f"{r['share_r']:.2f} / {r['ms_r']:.2f} ({r['ms']:.2f})")
 
 
 def eta_sweep(ctx: Context, s: Section) -> str:

@@ -216,50 +216,23 @@ class TwoSided:
     """
     E(μ) and E_avg of the two sides of an interface (:func:`dielectric_tables`: lit from above,
     from below) at a surface's roughness, and the shares of :func:`transmitted_shares`
-    (``t_above`` = 1 − F_avg(η), ``eta`` the relative index). With a uniform α the two
-    :class:`Row` are joined end to end, so that a lookup on either side gathers 2 values, and
-    the shares are constants of the material.
+    (``t_above`` = 1 − F_avg(η), ``eta`` the relative index).
     """
 
     def __init__(self, tables, alpha_u, alpha_v, t_above, eta):
         self.sides = tuple(Albedos(t, alpha_u, alpha_v) for t in tables)
         self.t_above, self.eta = t_above, eta
-        rows = [a.row for a in self.sides]
-        self.joined, self.shares = None, None
-        if rows[0] is not None and rows[1] is not None:
-            self.n_mu = rows[0].n_mu
-            self.joined = _join(rows[0]._values, rows[1]._values, self.n_mu)
-            self.averages = (rows[0].average, rows[1].average)
-            self.shares = transmitted_shares(t_above, eta, *self.averages)
 
     def __call__(self, mu, above, distr):
         """(E(μ), E_avg) on the side ``above`` (a mask: True for the side the normal points
         to), at the roughness of ``distr`` (as :meth:`Albedos.__call__`)."""
-        if self.joined is None:
-            (e0, a0), (e1, a1) = (side(mu, distr) for side in self.sides)
-            return dr.select(above, e0, e1), dr.select(above, a0, a1)
-        i, t = _cell(dr.sqrt(dr.maximum(mu, 0.0)), self.n_mu)
-        i = i + dr.select(above, 0, self.n_mu)
-        e = dr.lerp(_gather(self.joined, i), _gather(self.joined, i + 1), t)
-        return e, dr.select(above, *self.averages)
+        (e0, a0), (e1, a1) = (side(mu, distr) for side in self.sides)
+        return dr.select(above, e0, e1), dr.select(above, a0, a1)
 
     def transmitted(self, distr):
         """(x_above, x_below) at the roughness of ``distr``."""
-        if self.shares is not None:
-            return self.shares
         averages = (side.average(distr) for side in self.sides)
         return transmitted_shares(self.t_above, self.eta, *averages)
-
-
-def _join(a, b, n: int):
-    """Two rows of ``n`` values end to end (one ``mi.Float`` in JIT variants: a gather keeps
-    gradients to the rows)."""
-    if not dr.is_jit_v(mi.Float):
-        return np.concatenate([a, b])
-    i = dr.arange(mi.UInt32, 2 * n)
-    first = i < n
-    return dr.select(first, dr.gather(mi.Float, a, i, first),
-                     dr.gather(mi.Float, b, i - n, ~first))
 
 
 def equivalent_alpha(distr):
