@@ -25,12 +25,14 @@ F_avg = 2∫F(μ)μ dμ, which gives the colour of the compensation
 ``cooktorrance`` plugin's own single-scattering lobe (:mod:`mi_brdfs.albedo_tables`) and shipped
 in ``mi_brdfs/data/microfacet_albedo.npz``. The nodes are uniform in x = sqrt(μ) and in
 y = sqrt(α / α_max): the albedo changes fastest at grazing incidence and at small roughness.
-:func:`albedo` interpolates bilinearly in (x, y) in every variant (a gather from a
-``mi.Float`` in JIT variants, a NumPy lookup in scalar ones), and :func:`average_albedo`
-linearly in y: E_avg of a node is the exact integral of the interpolant in μ, so the two are
-consistent between the nodes too and the compensated albedo is 1 up to the interpolation
-error of E alone. Beyond α_max the tables hold their last value (the compensation then falls
-short: the lobe loses energy, it never creates it).
+:meth:`Table.albedo` interpolates bilinearly in (x, y) in every variant (a NumPy lookup in
+scalar variants; in JIT ones a gather from a ``mi.Float`` that stores each node beside the next,
+so that one packet gather reads both ends of a cell instead of two gathers; the
+``multiscatter`` bench pairs of ``make bench`` price the compensation),
+and :meth:`Table.average_albedo` linearly in y: E_avg of a node is the exact integral of the
+interpolant in μ, so the two are consistent between the nodes too and the compensated albedo
+is 1 up to the interpolation error of E alone. Beyond α_max the tables hold their last value
+(the compensation then falls short: the lobe loses energy, it never creates it).
 """
 
 from __future__ import annotations
@@ -126,6 +128,22 @@ def _gather(table, index):
     return float(table[int(index)])
 
 
+def _pair(table, index):
+    """(E at a node, E at the next node): entries 2·index and 2·index + 1 of a table of
+    :func:`_node_pairs`, one packet gather (``JitFlag.PacketOps``) in JIT variants."""
+    if dr.is_jit_v(mi.Float):
+        pair = dr.gather(mi.Point2f, table, index)
+        return pair.x, pair.y
+    k = 2 * int(index)
+    return float(table[k]), float(table[k + 1])
+
+
+def _node_pairs(E):
+    """E(..., μ) with each node stored beside the next, flat: [E₀, E₁, E₁, E₂, ...] per row
+    (n_μ − 1 pairs), so that a linear lookup reads one pair, not two separate values."""
+    return np.stack((E[..., :-1], E[..., 1:]), axis=-1).ravel()
+
+
 def _cell(t, n):
     """(index of the node below, fraction to the next) of t ∈ [0, 1] on n uniform nodes."""
     s = dr.clip(t, 0.0, 1.0) * (n - 1)
@@ -148,31 +166,32 @@ class Table:
         self.n_alpha, self.n_mu = E.shape
         self.alpha_max = tables["alpha_max"]
         jit = dr.is_jit_v(mi.Float)
-        self._E = mi.Float(E.ravel().astype(np.float32)) if jit else E.ravel()
+        self._E = mi.Float(_node_pairs(E).astype(np.float32)) if jit else _node_pairs(E)
         self._E_avg = mi.Float(E_avg.astype(np.float32)) if jit else E_avg
 
     def albedo(self, mu, alpha):
         """E(μ, α), bilinear in (sqrt μ, sqrt(α/α_max))."""
         i, tx = _cell(dr.sqrt(dr.maximum(mu, 0.0)), self.n_mu)
         j, ty = _cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
-        row0, row1 = j * self.n_mu + i, (j + 1) * self.n_mu + i
-        e00, e01 = _gather(self._E, row0), _gather(self._E, row0 + 1)
-        e10, e11 = _gather(self._E, row1), _gather(self._E, row1 + 1)
-        return dr.lerp(dr.lerp(e00, e01, tx), dr.lerp(e10, e11, tx), ty)
+        pairs = self.n_mu - 1  # per row of α
+        e0 = dr.lerp(*_pair(self._E, j * pairs + i), tx)
+        e1 = dr.lerp(*_pair(self._E, (j + 1) * pairs + i), tx)
+        return dr.lerp(e0, e1, ty)
 
     def at(self, alpha) -> "Row":
         """The table at one roughness (a uniform α, a width-1 Float or a float): E(μ) on the
-        μ nodes, interpolated in α once, so that a lookup gathers 2 values, not 4."""
+        μ nodes, interpolated in α once, so that a lookup reads 1 pair of values, not 2."""
         j, ty = _cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
+        size = 2 * (self.n_mu - 1)  # a row of pairs
         if dr.is_jit_v(mi.Float):
-            i = dr.arange(mi.UInt32, self.n_mu)
-            row = dr.lerp(dr.gather(mi.Float, self._E, j * self.n_mu + i),
-                          dr.gather(mi.Float, self._E, (j + 1) * self.n_mu + i), ty)
+            k = dr.arange(mi.UInt32, size)
+            row = dr.lerp(dr.gather(mi.Float, self._E, j * size + k),
+                          dr.gather(mi.Float, self._E, (j + 1) * size + k), ty)
         else:
-            start = int(j) * self.n_mu
-            row = (1.0 - ty) * self._E[start:start + self.n_mu] + \
-                ty * self._E[start + self.n_mu:start + 2 * self.n_mu]
-        return Row(row, self.average_albedo(alpha))
+            start = int(j) * size
+            row = (1.0 - ty) * self._E[start:start + size] + \
+                ty * self._E[start + size:start + 2 * size]
+        return Row(row, self.n_mu, self.average_albedo(alpha))
 
     def average_albedo(self, alpha):
         """E_avg(α), linear in sqrt(α/α_max)."""
@@ -242,17 +261,17 @@ def equivalent_alpha(distr):
 
 
 class Row:
-    """E(μ) at one roughness (:meth:`Table.at`): ``albedo(mu)`` linear in sqrt μ, and the
-    roughness's ``average`` E_avg."""
+    """E(μ) at one roughness (:meth:`Table.at`; ``pairs`` of its ``n_mu`` nodes as
+    :func:`_node_pairs` stores them): ``albedo(mu)`` linear in sqrt μ, and the roughness's
+    ``average`` E_avg."""
 
-    def __init__(self, values, average):
-        self._values, self.average = values, average
-        self.n_mu = len(values) if not dr.is_jit_v(mi.Float) else dr.width(values)
+    def __init__(self, pairs, n_mu, average):
+        self._pairs, self.n_mu, self.average = pairs, n_mu, average
 
     def albedo(self, mu):
         """E(μ), linear in sqrt μ between the nodes."""
         i, t = _cell(dr.sqrt(dr.maximum(mu, 0.0)), self.n_mu)
-        return dr.lerp(_gather(self._values, i), _gather(self._values, i + 1), t)
+        return dr.lerp(*_pair(self._pairs, i), t)
 
 
 def lobe(e_i, e_o, e_avg):
