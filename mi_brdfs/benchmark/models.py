@@ -106,23 +106,36 @@ def jit_cost(a, b, ctx: Context, sample: bool = False):
 
 
 def scalar_cost(a, b, ctx: Context):
-    """(µs per eval_pdf call of A, of B, ratio) in the scalar variant (per ray in a render)."""
-    with ctx.scalar():
-        n = ctx.n(20_000, 200)
-        calls = {}
-        for key, spec in (("a", a), ("b", b)):
-            bsdf = load_bsdf(spec)
-            si = batch.interaction([0.3, 0.2, 0.932738])
-            w = mi.Vector3f(0.1, 0.4, 0.910465)
-            c = mi.BSDFContext()
+    """(µs per eval_pdf call of A, of B, ratio) in the scalar variant (per ray in a render);
+    called within ``ctx.scalar()``."""
+    n = ctx.n(20_000, 200)
+    calls = {}
+    for key, spec in (("a", a), ("b", b)):
+        bsdf = load_bsdf(spec)
+        si = batch.interaction([0.3, 0.2, 0.932738])
+        w = mi.Vector3f(0.1, 0.4, 0.910465)
+        c = mi.BSDFContext()
 
-            def call(bsdf=bsdf, si=si, w=w, c=c):
-                for _ in range(n):
-                    bsdf.eval_pdf(c, si, w)
-            calls[key] = call
-        times = interleaved(calls, repeats=ctx.n(5, 2))
-        return (median(times["a"]) / n * 1e6, median(times["b"]) / n * 1e6,
-                median_ratio(times, "a", "b"))
+        def call(bsdf=bsdf, si=si, w=w, c=c):
+            for _ in range(n):
+                bsdf.eval_pdf(c, si, w)
+        calls[key] = call
+    times = interleaved(calls, repeats=ctx.n(5, 2))
+    return (median(times["a"]) / n * 1e6, median(times["b"]) / n * 1e6,
+            median_ratio(times, "a", "b"))
+
+
+def _costs(ctx: Context) -> tuple[dict, dict]:
+    """({label: jit_cost}, {label: scalar_cost}) of every pair of CHOICES and DISABLED: the JIT
+    ones first, then the scalar ones in one switch of variant (each switch reloads Mitsuba's
+    Python modules); sample() choices have no scalar cost."""
+    pairs = CHOICES + DISABLED
+    jit = {label: jit_cost(a, b, ctx, sample=label.endswith("(sample)"))
+           for label, a, b in pairs}
+    with ctx.scalar():
+        scalar = {label: scalar_cost(a, b, ctx) for label, a, b in pairs
+                  if not label.endswith("(sample)")}
+    return jit, scalar
 
 
 def fresnel_error() -> list:
@@ -144,22 +157,20 @@ def fresnel_error() -> list:
 def section(ctx: Context) -> Section:
     s = Section("Model choices")
     rows = []
-    for label, a, b in CHOICES:
-        sample = label.endswith("(sample)")
-        ta, tb, ratio = jit_cost(a, b, ctx, sample=sample)
-        sa, sb, sratio = scalar_cost(a, b, ctx) if not sample else (math.nan,) * 3
+    jit, scalar = _costs(ctx)
+    for label, _, _ in CHOICES:
+        ta, tb, ratio = jit[label]
+        sa, sb, sratio = scalar.get(label, (math.nan,) * 3)
         s.values[f"model: {label}"] = f"{ratio:.2f}×"
-        rows.append((label, "sample()" if sample else "eval_pdf()", f"{ta:.3f} s", f"{tb:.3f} s",
-                     f"**{ratio:.2f}×**",
-                     "—" if sample else f"{sa:.1f} / {sb:.1f} µs ({sratio:.2f}×)"))
+        rows.append((label, "eval_pdf()" if label in scalar else "sample()", f"{ta:.3f} s", f"{tb:.3f} s", f"**{ratio:.2f}×**",
+                     "—" if label not in scalar else f"{sa:.1f} / {sb:.1f} µs ({sratio:.2f}×)"))
     schlick = fresnel_error()
     for label, max_f, _, albedo in schlick:
         s.values[f"schlick: {label}, max ΔF"] = max_f
         s.values[f"schlick: {label}, ΔE(75°)"] = albedo
     lobes = []
-    for label, a, b in DISABLED:
-        ta, tb, ratio = jit_cost(a, b, ctx)
-        sa, sb, sratio = scalar_cost(a, b, ctx)
+    for label, _, _ in DISABLED:
+        (ta, tb, ratio), (sa, sb, sratio) = jit[label], scalar[label]
         s.values[f"disabled: {label}"] = f"{ratio:.2f}×"
         lobes.append((label, f"{ta:.3f} s", f"{tb:.3f} s", f"**{ratio:.2f}×**",
                       f"{sa:.1f} / {sb:.1f} µs ({sratio:.2f}×)"))
