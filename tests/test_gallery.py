@@ -32,6 +32,8 @@ def test01_every_plugin_and_form_has_a_row():
     assert {b.get("shadowing") for b in ct} >= {"vcavity", "smith"}
     assert any(b.get("distribution") == "ggx" for b in ct)
     assert any(b.get("transmission") for b in ct)
+    # the energy compensation of both lobes: the conductor and the dielectric
+    assert {bool(b.get("transmission")) for b in ct if b.get("multiscatter")} == {False, True}
     assert any("alpha_u" in row.spec(0) for row in gallery.ROWS)
     ashikhmin = [row.spec(c) for row in gallery.ROWS if row.base["type"] == "ashikhmin"
                  for c in range(len(row.columns))]
