@@ -128,7 +128,7 @@ ROWS: tuple[Row, ...] = (
     Row("cooktorrance transmission", "GGX, smith, η = 1.5",
         {"type": "cooktorrance", "distribution": "ggx", "shadowing": "smith",
          "transmission": True, "eta": 1.5}, _alphas()),
-    Row("cooktorrance transmission multiscatter", "GGX, smith, η = 1.5, energy compensation",
+    Row("cooktorrance multiscatter", "transmission, GGX, smith, η = 1.5",
         {"type": "cooktorrance", "distribution": "ggx", "shadowing": "smith",
          "transmission": True, "eta": 1.5, "multiscatter": True}, _alphas(_ROUGH)),
     Row("ward original", "Ward 1992", {**_WARD, "form": "original"}, _alphas()),
