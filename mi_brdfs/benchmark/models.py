@@ -160,10 +160,13 @@ def section(ctx: Context) -> Section:
     jit, scalar = _costs(ctx)
     for label, _, _ in CHOICES:
         ta, tb, ratio = jit[label]
-        sa, sb, sratio = scalar.get(label, (math.nan,) * 3)
         s.values[f"model: {label}"] = f"{ratio:.2f}×"
-        rows.append((label, "eval_pdf()" if label in scalar else "sample()", f"{ta:.3f} s", f"{tb:.3f} s", f"**{ratio:.2f}×**",
-                     "—" if label not in scalar else f"{sa:.1f} / {sb:.1f} µs ({sratio:.2f}×)"))
+        per_call = "—"  # sample() choices: no scalar cost
+        if label in scalar:
+            sa, sb, sratio = scalar[label]
+            per_call = f"{sa:.1f} / {sb:.1f} µs ({sratio:.2f}×)"
+        rows.append((label, "eval_pdf()" if label in scalar else "sample()", f"{ta:.3f} s",
+                     f"{tb:.3f} s", f"**{ratio:.2f}×**", per_call))
     schlick = fresnel_error()
     for label, max_f, _, albedo in schlick:
         s.values[f"schlick: {label}, max ΔF"] = max_f
