@@ -11,7 +11,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..scattering import ashikhmin as terms
-from ..scattering import mixture, vector
+from ..scattering import vector
 from . import lobes, properties
 
 PLUGIN = "ashikhmin"
@@ -28,6 +28,75 @@ def _constant(tex) -> float | None:
     if rng is None or tex.is_spatially_varying() or rng[0] != rng[1]:
         return None
     return rng[0]
+
+
+class Substrate(lobes.CosineLobe):
+    """The diffuse term Rd (1 − Rs)·28/(23π)(1 − (1 − cosθi/2)⁵)(1 − (1 − cosθo/2)⁵)·cosθo,
+    sampled by the cosine-weighted hemisphere; ``rs``, ``rd``: the reflectance textures."""
+
+    def __init__(self, rs, rd):
+        self.rs, self.rd = rs, rd
+
+    def diffuse_reflectance(self, si, active):
+        """Rd (1 − Rs): the term's albedo, but for its factor 1 − (1 − cosθi/2)⁵."""
+        return properties.clip_at(self.rd, si, active) * (
+            1.0 - properties.clip_at(self.rs, si, active))
+
+    def value(self, si, wo, active):
+        return self.diffuse_reflectance(si, active) * (terms.diffuse(si.wi.z, wo.z) * wo.z)
+
+    def weight(self, ctx, si, active):
+        """Its albedo at cosθi (:func:`~mi_brdfs.scattering.ashikhmin.albedo_bounds`)."""
+        return _bounds(self.rs, self.rd, si, active)[1]
+
+
+class Glossy(lobes.Lobe):
+    """
+    The specular term of exponents ``nu``, ``nv`` (textures, the same one when isotropic) and
+    Schlick's Fresnel of ``rs``, sampled by the paper's half vector; ``rd`` weighs it against
+    the substrate.
+    """
+
+    kind = "GlossyReflection"
+
+    def __init__(self, rs, rd, nu, nv, component: int, flags: int):
+        self.rs, self.rd, self.nu, self.nv = rs, rd, nu, nv
+        self.component, self.flags = component, flags
+
+    def exponents(self, si, active):
+        """(nu, nv) at ``si``; values set through ``mi.traverse`` are clamped into range."""
+        nu = dr.clip(self.nu.eval_1(si, active), 0.0, terms.EXPONENT_MAX)
+        if self.nv is self.nu:
+            return nu, nu
+        return nu, dr.clip(self.nv.eval_1(si, active), 0.0, terms.EXPONENT_MAX)
+
+    def eval_pdf(self, ctx, si, wo, active):
+        wi = si.wi
+        active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
+        # ρs·cosθo, from the density of ωi reflected about the sampled half vector
+        pdf, k_dot_h = terms.lobe(wi, wo, *self.exponents(si, active))
+        value = terms.specular(pdf, terms.fresnel(k_dot_h, properties.clip_at(self.rs, si, active)),
+                               wi.z, wo.z)
+        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        """ωi reflected about a half vector drawn as the paper draws it."""
+        return vector.reflect(si.wi, terms.sample_half(sample2, *self.exponents(si, active))), \
+            True
+
+    def weight(self, ctx, si, active):
+        """The bound of its albedo at cosθi (:func:`~mi_brdfs.scattering.ashikhmin.
+        albedo_bounds`): towards grazing incidence, where the substrate vanishes, the glossy
+        lobe takes every sample."""
+        return _bounds(self.rs, self.rd, si, active)[0]
+
+
+def _bounds(rs, rd, si, active):
+    """The lobes' albedo bounds at cosθi, from the reflectances' means over channels (Rd
+    None: no substrate)."""
+    rs_mean = dr.mean(properties.clip_at(rs, si, active))
+    rd_mean = 0.0 if rd is None else dr.mean(properties.clip_at(rd, si, active))
+    return terms.albedo_bounds(rs_mean, rd_mean, si.wi.z)
 
 
 class Ashikhmin(mi.BSDF):
@@ -128,73 +197,28 @@ class Ashikhmin(mi.BSDF):
         self.m_diffuse_reflectance = properties.reflectance(props, PLUGIN,
                                                             "diffuse_reflectance", 0.5)
         # Lobes in component order: the diffuse one, Rd (1 − Rs)·…, is 0 where Rd ≡ 0 or Rs ≡ 1
-        has_diffuse = not (properties.is_zero(self.m_diffuse_reflectance)
-                           or _constant(self.m_specular_reflectance) == 1.0)
-        lobes.set_lobes(self, has_diffuse, True,
-                        GLOSSY_FLAGS | (ANISOTROPIC if anisotropic else 0))
+        self._has_diffuse = not (properties.is_zero(self.m_diffuse_reflectance)
+                                 or _constant(self.m_specular_reflectance) == 1.0)
+        self._glossy_flags = GLOSSY_FLAGS | (ANISOTROPIC if anisotropic else 0)
         self.parameters_changed()
+        self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
 
-    eval, pdf = lobes.eval_half, lobes.pdf_half
-    sample, eval_pdf = lobes.two_lobes_sample, lobes.two_lobes_eval_pdf
-    _enabled = lobes.two_lobes_enabled
-
-    def _eval_pdf(self, ctx, si, wo, active, enabled, params=None):
-        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the ``enabled`` lobes
-        (diffuse, glossy)."""
-        has_diffuse, has_glossy = enabled
-        wi = si.wi
-        active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
-        rs = self.m_specular_reflectance.eval(si, active)
-        if has_diffuse:
-            # ρd·cosθo, sampled by the cosine-weighted hemisphere
-            pdf = dr.inv_pi * wo.z
-            value = self.m_diffuse_reflectance.eval(si, active) * (1.0 - rs) * (
-                terms.diffuse(wi.z, wo.z) * wo.z)
-        if has_glossy:
-            # ρs·cosθo, from the density of ωi reflected about the sampled half vector
-            nu, nv = params or self._glossy_params(si, active)
-            pdf_s, k_dot_h = terms.lobe(wi, wo, nu, nv)
-            value_s = terms.specular(pdf_s, terms.fresnel(k_dot_h, rs), wi.z, wo.z)
-            if has_diffuse:  # both lobes: their sum, and the mixture of both strategies
-                value = value + value_s
-                pdf = mixture.pdf(self._glossy_probability(si), pdf_s, pdf)
-            else:
-                value, pdf = value_s, pdf_s
-        return lobes.finish(value, pdf, active)
-
-    def _glossy_params(self, si, active):
-        """(nu, nv) at ``si``; values set through ``mi.traverse`` are clamped into range."""
-        nu = dr.clip(self.m_nu.eval_1(si, active), 0.0, terms.EXPONENT_MAX)
-        if self.m_nv is self.m_nu:
-            return nu, nu
-        return nu, dr.clip(self.m_nv.eval_1(si, active), 0.0, terms.EXPONENT_MAX)
-
-    def _sample_glossy(self, si, sample2, params):
-        """ωi reflected about a half vector drawn as the paper draws it."""
-        return vector.reflect(si.wi, terms.sample_half(sample2, *params))
-
-    def _glossy_probability(self, si):
-        """The probability of sampling the glossy lobe: the lobes' albedo bounds at cosθi."""
-        return mixture.probability(*terms.albedo_bounds(self._rs_mean, self._rd_mean, si.wi.z))
-
-    def eval_diffuse_reflectance(self, si, active=True):
-        """Rd (1 − Rs): the diffuse term's albedo, but for its factor 1 − (1 − cosθi/2)⁵."""
-        if self._diffuse is None:
-            return mi.Spectrum(0.0)
-        return self.m_diffuse_reflectance.eval(si, active) * (
-            1.0 - self.m_specular_reflectance.eval(si, active))
+    # the substrate (cosine-weighted hemisphere) and the glossy lobe, mixed by their albedos
+    sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
+    eval_diffuse_reflectance = lobes.eval_diffuse_reflectance
 
     def parameters_changed(self, keys=()):
-        """The reflectances' means, which weigh the lobe choice."""
-        self._rs_mean = mi.Float(dr.detach(self.m_specular_reflectance.mean()))
-        self._rd_mean = mi.Float(dr.detach(self.m_diffuse_reflectance.mean())
-                                 if self._diffuse is not None else 0.0)
-        # opaque: a changed parameter updates the kernel's inputs instead of recompiling it
-        dr.make_opaque(self._rs_mean, self._rd_mean)
+        """The lobes, from the parameters as they are now."""
+        # components: the substrate first; sampling: the glossy lobe first
+        rs, rd = self.m_specular_reflectance, self.m_diffuse_reflectance
+        substrate = [Substrate(rs, rd)] if self._has_diffuse else []
+        glossy = Glossy(rs, rd if self._has_diffuse else None, self.m_nu, self.m_nv,
+                        len(substrate), self._glossy_flags)
+        self.lobes = lobes.Mixture([glossy] + substrate)
 
     def traverse(self, cb):
         # Only the parameters of lobes that exist: the lobe structure is fixed at load time.
-        if self._diffuse is not None:
+        if self._has_diffuse:
             cb.put("diffuse_reflectance", self.m_diffuse_reflectance, DIFFERENTIABLE)
         cb.put("specular_reflectance", self.m_specular_reflectance, DIFFERENTIABLE)
         if self._separate:

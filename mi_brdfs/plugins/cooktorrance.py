@@ -15,8 +15,8 @@ import numpy as np
 from ..errors import ParameterError
 from ..scattering import microfacet, multiscatter
 from . import lobes, properties
-from .cooktorrance_conductor import ConductorLobe
-from .cooktorrance_dielectric import DielectricLobe
+from .cooktorrance_conductor import Compensation, MicrofacetReflection
+from .cooktorrance_dielectric import InterfaceCompensation, MicrofacetInterface
 from ..materials import conductor_ior, conductor_names, dielectric_ior, material_ior  # noqa: F401
 
 PLUGIN = "cooktorrance"
@@ -26,6 +26,7 @@ FRESNEL = ("exact", "schlick", "none")
 #: The named conductor used when neither ``material`` nor ``eta`` is given: copper, the metal
 #: of Cook & Torrance's own figures (and Mitsuba 0.6's conductor default).
 DEFAULT_MATERIAL = "Cu"
+
 
 
 def _constant_channels(props, name) -> list[float] | None:
@@ -39,32 +40,65 @@ def _constant_channels(props, name) -> list[float] | None:
     return None
 
 
-#: What ``transmission`` excludes, and why (one line each).
-NOT_WITH_TRANSMISSION = {
-    "material": "names a conductor; transmission needs a dielectric (give eta, or int_ior and "
-                "ext_ior)",
-    "diffuse_reflectance": "a diffuse base under a transmitting interface is not part of the "
-                           "model (Walter et al. 2007)",
+_REFRACTION_ONLY = "is a parameter of the refraction lobe: give transmission = true as well"
+_DIELECTRIC_ONLY = "with transmission = true: only a dielectric transmits"
+
+#: What excludes what, one line each: (the setting, the parameter it refuses, why). A setting
+#: is ``transmission`` or ``reflection`` (transmission = true or false), a parameter given
+#: (``eta``, ``k``), or ``!eta``: no eta, without transmission (which reads int_ior and
+#: ext_ior instead). Checked in order: the first that applies is the error.
+EXCLUSIONS = (
+    ("transmission", "material", "must not be given with transmission = true: names a "
+                                 "conductor; transmission needs a dielectric (give eta, or "
+                                 "int_ior and ext_ior)"),
+    ("transmission", "diffuse_reflectance", "must not be given with transmission = true: a "
+                                            "diffuse base under a transmitting interface is not "
+                                            "part of the model (Walter et al. 2007)"),
+    ("reflection", "specular_transmittance", _REFRACTION_ONLY),
+    ("reflection", "int_ior", _REFRACTION_ONLY),
+    ("reflection", "ext_ior", _REFRACTION_ONLY),
+    ("eta", "int_ior", "must not be given together with eta (eta is int_ior/ext_ior)"),
+    ("eta", "ext_ior", "must not be given together with eta (eta is int_ior/ext_ior)"),
+    ("eta", "material", "must not be given together with eta or k (it sets both)"),
+    ("k", "material", "must not be given together with eta or k (it sets both)"),
+    ("!eta", "k", "needs eta as well (or a material instead of both)"),
+)
+
+#: The switches ``transmission`` needs: parameter -> (the value, why).
+WITH_TRANSMISSION = {
+    "shadowing": ("smith", "the V-cavity masking (Cook & Torrance 1982) is derived for light "
+                           "above the surface, and gives no masking for a refracted pair"),
+    "fresnel": ("exact", "the refracted fraction is 1 − F, with total internal reflection"),
 }
+
+
+def _check_exclusions(props, transmission: bool) -> None:
+    """:data:`EXCLUSIONS` and, with ``transmission``, :data:`WITH_TRANSMISSION` and k = 0."""
+    settings = {"transmission": transmission, "reflection": not transmission,
+                "eta": "eta" in props, "k": "k" in props,
+                "!eta": "eta" not in props and not transmission}
+    for setting, name, why in EXCLUSIONS:
+        if settings[setting]:
+            properties.reject(props, PLUGIN, name, why)
+    if not transmission:
+        return
+    for name, (value, why) in WITH_TRANSMISSION.items():
+        if name in props and props[name] != value:
+            raise ParameterError(PLUGIN, name, props[name],
+                                 f"must be \"{value}\" with transmission = true: {why}")
+    if "k" in props and not (props.type("k") in (mi.Properties.Type.Float,
+                                                 mi.Properties.Type.Integer)
+                             and float(props["k"]) == 0.0):
+        raise ParameterError(PLUGIN, "k", props["k"], "must be 0 (or absent) " + _DIELECTRIC_ONLY)
 
 
 def _read_dielectric(props) -> float:
     """
-    The relative index η = η_int/η_ext of ``transmission``: ``eta`` (a number ≠ 1, with ``k``
-    absent or 0) or ``int_ior``/``ext_ior`` (numbers or names, as ``roughdielectric`` takes
-    them; defaults ``bk7`` inside and ``air`` outside).
+    The relative index η = η_int/η_ext of ``transmission``: ``eta`` (a number ≠ 1) or
+    ``int_ior``/``ext_ior`` (numbers or names, as ``roughdielectric`` takes them; defaults
+    ``bk7`` inside and ``air`` outside).
     """
-    for name, why in NOT_WITH_TRANSMISSION.items():
-        properties.reject(props, PLUGIN, name, f"must not be given with transmission = true: {why}")
-    if "k" in props and not (props.type("k") in (mi.Properties.Type.Float,
-                                                 mi.Properties.Type.Integer)
-                             and float(props["k"]) == 0.0):
-        raise ParameterError(PLUGIN, "k", props["k"], "must be 0 (or absent) with transmission "
-                                                      "= true: only a dielectric transmits")
     if "eta" in props:
-        for name in ("int_ior", "ext_ior"):
-            properties.reject(props, PLUGIN, name, "must not be given together with eta (eta is "
-                                                "int_ior/ext_ior)")
         eta, where = _dielectric_eta(props), "eta"
     else:
         inside = dielectric_ior(props["int_ior"] if "int_ior" in props else "bk7", PLUGIN,
@@ -99,24 +133,17 @@ def _read_ior(props, needed: bool):
     ``(eta, k, material)`` from ``material`` or ``eta``/``k`` (see the class docstring); all
     None when the Fresnel term is off (``needed`` false) and none of them is given.
     """
-    has_eta, has_k = "eta" in props, "k" in props
     if "material" in props:
         name = props["material"]
-        if has_eta or has_k:
-            raise ParameterError(PLUGIN, "material", name,
-                                 "must not be given together with eta or k (it sets both)")
         return (*material_ior(name, PLUGIN), name)
-    if not has_eta:
-        if has_k:
-            raise ParameterError(PLUGIN, "k", props["k"],
-                                 "needs eta as well (or a material instead of both)")
+    if "eta" not in props:
         if not needed:
             return None, None, None
         return (*material_ior(DEFAULT_MATERIAL, PLUGIN), DEFAULT_MATERIAL)
     eta = properties.texture(props, PLUGIN, "eta", 1.5, lo=0.0, hi=math.inf)
     k = properties.texture(props, PLUGIN, "k", 0.0, lo=0.0, hi=math.inf)
     eta_c = _constant_channels(props, "eta")
-    k_c = _constant_channels(props, "k") if has_k else [0.0]
+    k_c = _constant_channels(props, "k") if "k" in props else [0.0]
     if eta_c is not None and k_c is not None:
         n = max(len(eta_c), len(k_c))
         if any(eta_c[i % len(eta_c)] == 0 and k_c[i % len(k_c)] == 0 for i in range(n)):
@@ -126,7 +153,6 @@ def _read_ior(props, needed: bool):
 
 
 GLOSSY_FLAGS = lobes.flag("GlossyReflection", "FrontSide")
-DIFFUSE_FLAGS = lobes.flag("DiffuseReflection", "FrontSide")
 ANISOTROPIC = lobes.flag("Anisotropic")
 REFLECTION_FLAGS = lobes.flag("GlossyReflection", "FrontSide", "BackSide")
 TRANSMISSION_FLAGS = lobes.flag("GlossyTransmission", "FrontSide", "BackSide", "NonSymmetric")
@@ -350,6 +376,7 @@ class CookTorrance(mi.BSDF):
                                                 microfacet.DISTRIBUTIONS)
         #: Whether the refraction lobe is there (a rough dielectric interface).
         self.m_transmission = properties.boolean(props, PLUGIN, "transmission", False)
+        _check_exclusions(props, self.m_transmission)
         #: 'vcavity' or 'smith'.
         self.m_shadowing = properties.choice(props, PLUGIN, "shadowing",
                                              "smith" if self.m_transmission else "vcavity",
@@ -365,16 +392,18 @@ class CookTorrance(mi.BSDF):
                                     "isotropic, read at sqrt(alpha_u*alpha_v), so the white "
                                     "furnace departs from 1 (below, and at grazing incidence "
                                     "above it; validation/REPORT.md measures by how much)")
+        #: Factor on the microfacet (reflection) lobe.
+        self.m_specular_reflectance = properties.reflectance(props, PLUGIN,
+                                                             "specular_reflectance", 1.0)
         if self.m_transmission:
             self._read_transmission(props)
         else:
             self._read_reflection(props)
         self.parameters_changed()
+        self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
 
     def _read_transmission(self, props):
-        """The dielectric's parameters and components (as roughdielectric: reflection 0,
-        transmission 1, both sides)."""
-        self._check_transmission(props)
+        """The dielectric's index and the factor on its refraction lobe."""
         #: The relative index int_ior/ext_ior (a Float: refraction bends all wavelengths
         #: alike); m_k and m_material are None.
         eta = _read_dielectric(props)
@@ -384,30 +413,18 @@ class CookTorrance(mi.BSDF):
             properties.warn(PLUGIN, f"multiscatter with eta = {eta:g}: the albedo tables end at "
                                     f"eta = {1.0 / eta_max:.4g} and {eta_max:g}, and are read "
                                     f"there, so the white furnace departs from 1")
-        #: Factors on the reflection and the refraction lobe.
-        self.m_specular_reflectance = properties.reflectance(props, PLUGIN,
-                                                             "specular_reflectance", 1.0)
+        #: Factor on the refraction lobe.
         self.m_specular_transmittance = properties.reflectance(props, PLUGIN,
                                                                "specular_transmittance", 1.0)
         #: No diffuse base under a transmitting interface.
         self.m_diffuse_reflectance = None
-        aniso = ANISOTROPIC if self.m_anisotropic else 0
-        self.m_components = [REFLECTION_FLAGS | aniso, TRANSMISSION_FLAGS | aniso]
-        self.m_flags = REFLECTION_FLAGS | TRANSMISSION_FLAGS | aniso
 
     def _read_reflection(self, props):
-        """The conductor's (or reflecting dielectric's) parameters and components: lobe 0 is
-        the microfacet lobe (as roughconductor's only one), lobe 1 the diffuse base."""
-        for name in ("specular_transmittance", "int_ior", "ext_ior"):
-            properties.reject(props, PLUGIN, name, "is a parameter of the refraction lobe: "
-                                                   "give transmission = true as well")
+        """The conductor's (or reflecting dielectric's) index and the optional diffuse base."""
         #: Relative IOR η + ik, and the material it came from (None: given as eta, k).
         self.m_eta, self.m_k, self.m_material = _read_ior(props, self.m_fresnel != "none")
         if self.m_fresnel == "none" and self.m_eta is not None:
             properties.warn(PLUGIN, "fresnel = none: eta and k (or the material) are not used")
-        #: Factor on the microfacet lobe.
-        self.m_specular_reflectance = properties.reflectance(props, PLUGIN,
-                                                             "specular_reflectance", 1.0)
         self.m_specular_transmittance = None
         #: Albedo of the Lambertian base; None when it is the constant 0 (no lobe).
         diffuse = properties.reflectance(props, PLUGIN, "diffuse_reflectance", 0.0)
@@ -418,41 +435,13 @@ class CookTorrance(mi.BSDF):
                                 "the diffuse base is added, not coupled, so the lobes' albedos "
                                 "can add up to more than 1 (at every angle with fresnel = none, "
                                 "towards grazing incidence with a Fresnel term)")
-        components = [GLOSSY_FLAGS | (ANISOTROPIC if self.m_anisotropic else 0)]
-        if self.m_diffuse_reflectance is not None:
-            components.append(DIFFUSE_FLAGS)
-        self.m_components = components  # a copy crosses to C++: assign, don't append
-        self.m_flags = components[0] | (DIFFUSE_FLAGS if len(components) > 1 else 0)
 
-    def _check_transmission(self, props):
-        """The switches that ``transmission`` does not combine with, each one line."""
-        if self.m_shadowing != "smith":
-            raise ParameterError(PLUGIN, "shadowing", self.m_shadowing,
-                                 "must be \"smith\" with transmission = true: the V-cavity "
-                                 "masking (Cook & Torrance 1982) is derived for light above the "
-                                 "surface, and gives no masking for a refracted pair")
-        if self.m_fresnel != "exact":
-            raise ParameterError(PLUGIN, "fresnel", self.m_fresnel,
-                                 "must be \"exact\" with transmission = true (the refracted "
-                                 "fraction is 1 − F, with total internal reflection)")
-
-    # The lobes do the work: ConductorLobe (reflection, with the diffuse base) or
-    # DielectricLobe (reflection and refraction), as pbrt-v4 separates ConductorBxDF and
-    # DielectricBxDF.
-    eval, pdf = lobes.eval_half, lobes.pdf_half
-
-    def eval_pdf(self, ctx, si, wo, active=True):
-        return self._lobe.eval_pdf(ctx, si, lobes.vector(wo), active)
-
-    def sample(self, ctx, si, sample1, sample2, active=True):
-        return self._lobe.sample(ctx, si, sample1, sample2, active)
-
-    def eval_diffuse_reflectance(self, si, active=True):
-        # The default, eval(wo = n)·π, would count the glossy lobe
-        # (https://github.com/mitsuba-renderer/mitsuba3/pull/1896).
-        if self.m_diffuse_reflectance is None:  # (also with transmission: no diffuse base)
-            return mi.Spectrum(0.0)
-        return self.m_diffuse_reflectance.eval(si, active)
+    # The lobes do the work (lobes.Mixture): without transmission the microfacet lobe
+    # (component 0), its compensation and the diffuse base (component 1); with it the
+    # interface (reflection 0, refraction 1) and its compensation, as pbrt-v4 separates
+    # ConductorBxDF and DielectricBxDF.
+    sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
+    eval_diffuse_reflectance = lobes.eval_diffuse_reflectance
 
     def traverse(self, cb):
         if self.m_anisotropic:
@@ -472,27 +461,33 @@ class CookTorrance(mi.BSDF):
             cb.put("diffuse_reflectance", self.m_diffuse_reflectance, DIFFERENTIABLE)
 
     def parameters_changed(self, keys=()):
-        """The lobe, from the parameters as they are now."""
+        """The lobes, from the parameters as they are now."""
+        aniso = ANISOTROPIC if self.m_anisotropic else 0
+        # the albedo tables of the compensation, at the roughness where it is uniform
+        alpha = multiscatter.uniform_alpha(self.m_alpha_u, self.m_alpha_v) \
+            if self.m_multiscatter else None
         if self.m_transmission:
-            self._lobe = DielectricLobe(self.m_distribution, self.m_alpha_u, self.m_alpha_v,
-                                        self.m_sample_visible, self.m_eta,
-                                        self.m_specular_reflectance,
-                                        self.m_specular_transmittance, self._tables())
+            tables = multiscatter.dielectric_tables(
+                self.m_distribution, float(dr.slice(self.m_eta)), alpha) \
+                if self.m_multiscatter else None
+            single = MicrofacetInterface(
+                self.m_distribution, self.m_alpha_u, self.m_alpha_v, self.m_sample_visible,
+                self.m_eta, self.m_specular_reflectance, self.m_specular_transmittance,
+                (REFLECTION_FLAGS | aniso, TRANSMISSION_FLAGS | aniso), tables)
+            compensation = None if tables is None else InterfaceCompensation(single)
         else:
-            self._lobe = ConductorLobe(self.m_distribution, self.m_alpha_u, self.m_alpha_v,
-                                       self.m_shadowing, self.m_fresnel, self.m_sample_visible,
-                                       self.m_eta, self.m_k, self.m_specular_reflectance,
-                                       self.m_diffuse_reflectance, self._tables())
-
-    def _tables(self):
-        """The albedo tables of the energy compensation, or None without it: the conductor's
-        one, or the dielectric's pair at this η (lit from above, from below)."""
-        if not self.m_multiscatter:
-            return None
-        if self.m_transmission:
-            return multiscatter.dielectric_tables(self.m_distribution,
-                                                  float(dr.slice(self.m_eta)))
-        return multiscatter.Table(self.m_distribution, self.m_shadowing)
+            table = multiscatter.conductor_table(self.m_distribution, self.m_shadowing,
+                                                 alpha) if self.m_multiscatter else None
+            single = MicrofacetReflection(
+                self.m_distribution, self.m_alpha_u, self.m_alpha_v, self.m_shadowing,
+                self.m_fresnel, self.m_sample_visible, self.m_eta, self.m_k,
+                self.m_specular_reflectance, GLOSSY_FLAGS | aniso, table)
+            compensation = None if table is None else Compensation(single)
+        terms = [single, compensation]
+        if self.m_diffuse_reflectance is not None:
+            terms.append(lobes.Diffuse(self.m_diffuse_reflectance, component=1))
+        self.lobes = lobes.Mixture([t for t in terms if t is not None],
+                                   two_sided=self.m_transmission)
 
     def to_string(self):
         if self.m_transmission:

@@ -1,8 +1,9 @@
 """
-The reflection lobe of :mod:`~mi_brdfs.plugins.cooktorrance` without transmission: the
-Cook-Torrance microfacet lobe ks·F·D·G/(4 cosθi cosθo), one-sided, with the paper's optional
-Lambertian base ρd/π, the two mixed for sampling (Veach 1997, §9.2.4). pbrt-v4's
-``ConductorBxDF`` and Mitsuba's ``roughconductor`` are the same lobe without the base.
+The lobes of :mod:`~mi_brdfs.plugins.cooktorrance` without transmission: the Cook-Torrance
+microfacet lobe ks·F·D·G/(4 cosθi cosθo) (:class:`MicrofacetReflection`, one-sided; pbrt-v4's
+``ConductorBxDF`` and Mitsuba's ``roughconductor`` are the same lobe) and Kulla & Conty's
+energy compensation of it (:class:`Compensation`), mixed with the paper's optional Lambertian
+base (:class:`~mi_brdfs.plugins.lobes.Diffuse`) by :class:`~mi_brdfs.plugins.lobes.Mixture`.
 
 Every method works in the local frame (normal +z), takes ``si.wi`` and ``wo`` as Mitsuba hands
 them, and looks ``mi.*`` up when it is called, so that one class serves every variant.
@@ -10,49 +11,43 @@ them, and looks ``mi.*`` up when it is called, so that one class serves every va
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import drjit as dr
 import mitsuba as mi
 
-from ..scattering import fresnel, microfacet, mixture, multiscatter, vector
+from ..scattering import fresnel, microfacet, multiscatter, vector
 from . import lobes, properties
 
 #: F of each ``fresnel`` setting, per spectrum (``none``: F ≡ 1, no term).
 FRESNEL_TERMS = {"exact": fresnel.exact, "schlick": fresnel.schlick, "none": None}
 
 
-class ConductorLobe:
+class MicrofacetReflection(lobes.Lobe):
     """
-    The microfacet reflection lobe and its diffuse base, for
-    :class:`~mi_brdfs.plugins.cooktorrance.CookTorrance` to delegate to. Component 0 is the
-    microfacet lobe (as ``roughconductor``'s only one, with its energy compensation when there
-    is one), component 1 the diffuse base.
+    ks·F(ωi·m)·D(m)·G(ωi, ωo, m)/(4 cosθi cosθo), m the half vector, sampled by microfacet
+    normals reflected: the visible normals of its masking (Heitz & d'Eon 2014) or D·cosθm
+    (Walter et al. 2007). Component 0, ``flags``.
 
     Parameter ``kind`` (str): 'beckmann' or 'ggx'. Parameter ``alpha_u``, ``alpha_v``
-    (mi.Texture): the roughness, the same texture when isotropic. Parameter ``shadowing``
-    (str): 'vcavity' or 'smith'. Parameter ``fresnel`` (str): 'exact', 'schlick' or 'none'.
-    Parameter ``sample_visible`` (bool): visible normals, else D·cosθ. Parameter ``eta``,
-    ``k`` (mi.Texture | None): the complex index (None with ``fresnel`` 'none').
-    Parameter ``specular`` (mi.Texture): ks. Parameter ``diffuse`` (mi.Texture | None): ρd,
-    None for no base. Parameter ``table`` (multiscatter.Table | None): the albedo table of
-    the lobe's distribution and masking for Kulla & Conty's energy compensation, None for
-    single scattering only.
-
-    **Sampling.** Two samplers: microfacet normals for the single-scattering lobe, and the
-    cosine-weighted hemisphere for the lobes that are smooth in ωo (the diffuse base and the
-    compensation lobe, whose shape (1 − E(μo)) cosθo is close to a cosine). A sampler is
-    picked in proportion to the albedos of its lobes at ωi; the pdf is their mixture.
+    (mi.Texture): the roughness, the same texture when isotropic. Parameter ``masking``
+    (str): 'smith' or 'vcavity' (:data:`~mi_brdfs.scattering.microfacet.MASKING`). Parameter
+    ``fresnel`` (str): 'exact', 'schlick' or 'none'. Parameter ``sample_visible`` (bool).
+    Parameter ``eta``, ``k`` (mi.Texture | None): the complex index (None with ``fresnel``
+    'none'). Parameter ``specular`` (mi.Texture): ks. Parameter ``table``
+    (multiscatter.AlbedoTable | None): the lobe's own albedo E(μ) with F ≡ 1, which a
+    :class:`Compensation` of it needs (it then weighs the lobe as well).
     """
 
-    def __init__(self, kind, alpha_u, alpha_v, shadowing, fresnel, sample_visible, eta, k,
-                 specular, diffuse, table=None):
-        self.kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
-        self.shadowing, self.sample_visible = shadowing, sample_visible
+    kind = "GlossyReflection"
+
+    def __init__(self, kind, alpha_u, alpha_v, masking, fresnel, sample_visible, eta, k,
+                 specular, flags, table=None):
+        self.distribution_kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
+        self.masking, self.sample_visible = microfacet.MASKING[masking], sample_visible
         self.fresnel, self.fresnel_term = fresnel, FRESNEL_TERMS[fresnel]
-        self.eta, self.k = eta, k
-        self.specular, self.diffuse, self.table = specular, diffuse, table
-        #: E(μ) and E_avg at the surface's roughness (None without compensation)
-        self.albedos = None if table is None else \
-            multiscatter.Albedos(table, alpha_u, alpha_v)
+        self.eta, self.k, self.specular = eta, k, specular
+        self.flags, self.table = flags, table
         #: F_avg where the index is the same everywhere and for every wavelength (no texture,
         #: not a spectral variant): a constant of the material, computed once, not per lookup
         self.f_avg = None
@@ -60,221 +55,152 @@ class ConductorLobe:
                 not (eta.is_spatially_varying() or k.is_spatially_varying()):
             self.f_avg = self._fresnel_average(dr.zeros(mi.SurfaceInteraction3f), True)
             dr.make_opaque(self.f_avg)
-        #: F_ms/(π (1 − E_avg)) where the roughness and F_avg are constants as well
-        self.ms_factor = None
-        if self.albedos is not None and self.albedos.row is not None and \
-                (fresnel == "none" or self.f_avg is not None):
-            self.ms_factor = self._ms_factor(self.f_avg, self.albedos.row.average)
-            dr.make_opaque(self.ms_factor)
 
     def distribution(self, si, active) -> microfacet.Distribution:
         """The microfacet distribution at ``si``."""
         return microfacet.Distribution(
-            self.kind, *properties.roughness_at(self.alpha_u, self.alpha_v, si, active))
+            self.distribution_kind,
+            *properties.roughness_at(self.alpha_u, self.alpha_v, si, active))
 
-    def enabled(self, ctx):
-        """Which lobes the context enables: (microfacet, diffuse), bools."""
-        return (ctx.is_enabled(mi.BSDFFlags.GlossyReflection, 0),
-                self.diffuse is not None and ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, 1))
-
-    def eval_pdf(self, ctx, si, wo, active=True, at_wi=None):
-        """(f·cosθo, pdf of :meth:`sample`) at ``wo``: the enabled lobes and their mixture.
-        ``at_wi``: :meth:`_at_wi` where :meth:`sample` has it."""
-        use_mf, use_diffuse = self.enabled(ctx)
-        if not (use_mf or use_diffuse):
+    def eval_pdf(self, ctx, si, wo, active):
+        t = self._terms(si, wo, active)
+        if t is None:
             return mi.Spectrum(0.0), mi.Float(0.0)
-        wi = si.wi
-        active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
-        if lobes.none(active):
+        # f·cosθo = ks F D G / (4 cosθi cosθo) · cosθo
+        value = self._ks_f(si, t.cos_im, t.D * t.G / (4.0 * si.wi.z), t.active)
+        return dr.select(t.active, value, 0.0), dr.select(t.active, t.pdf, 0.0)
+
+    def sample_weight(self, ctx, si, wo, active):
+        """ks·F times, in closed form where D and 4 cosθi cancel: G/G1(ωi) (visible normals:
+        :meth:`~mi_brdfs.scattering.microfacet.Smith.visible_weight`) or
+        G·(ωo·m)/(cosθi cosθm) (D·cos)."""
+        t = self._terms(si, wo, active)
+        if t is None:
             return mi.Spectrum(0.0), mi.Float(0.0)
-        if use_mf and not use_diffuse and self.table is None:
-            return lobes.finish(*self._microfacet(si, wi, wo, active), active)
-        if at_wi is None:
-            at_wi = self._at_wi(si, wi, active, use_mf, use_diffuse)
-        p_normal, _, ms_scale = at_wi
-        # the lobes sampled from the cosine-weighted hemisphere: ρd/π·cosθo and f_ms·cosθo
-        value = mi.Spectrum(0.0)
-        if use_diffuse:
-            value = self.diffuse.eval(si, active) * dr.inv_pi * wo.z
-        if use_mf and self.table is not None:
-            e_o = self._albedos(si, wo.z, active)[0]
-            value = value + ms_scale * (dr.maximum(1.0 - e_o, 0.0) * wo.z)
-        pdf = wo.z * dr.inv_pi
-        if use_mf:  # and the single-scattering lobe, sampled by its microfacet normals
-            value_ss, pdf_ss = self._microfacet(si, wi, wo, active)
-            value, pdf = value + value_ss, mixture.pdf(p_normal, pdf_ss, pdf)
-        return lobes.finish(value, pdf, active)
+        if self.sample_visible:
+            shape = t.masking.visible_weight(si.wi, wo, t.m, t.cos_im, t.cos_om)
+        else:
+            shape = t.G * t.cos_om / dr.maximum(si.wi.z * t.m.z, 1e-30)
+        ok = t.active & (t.pdf > 0)
+        return dr.select(ok, self._ks_f(si, t.cos_im, shape, ok), 0.0), \
+            dr.select(t.active, t.pdf, 0.0)
 
-    def sample(self, ctx, si, sample1, sample2, active=True):
-        """(BSDFSample3f, weight f·cosθo/pdf): a microfacet normal reflected, or the
-        cosine-weighted hemisphere, chosen by ``sample1``."""
-        bs, sample2 = lobes.new_sample(), lobes.point2(sample2)
-        use_mf, use_diffuse = self.enabled(ctx)
-        if not (use_mf or use_diffuse):
-            return bs, mi.Spectrum(0.0)
+    def _terms(self, si, wo, active):
+        """
+        D, G, the masking and the density of ωo at the half vector m of ωi, ωo above the
+        surface (None where a scalar variant's lane is inactive): the one place that computes
+        them, for :meth:`eval_pdf` and :meth:`sample_weight`.
+        """
         wi = si.wi
-        active = active & (wi.z > 0)  # one-sided: the local frame's z is cosθ
+        m = vector.half_vector(wi, wo)
+        cos_im, cos_om = vector.dot(wi, m), vector.dot(wo, m)
+        # one-sided, and both directions see the front of the facet (false only when rounding
+        # makes ωi + ωo vanish: grazing, nearly opposite directions)
+        active = active & (wi.z > 0) & (wo.z > 0) & (cos_im > 0) & (cos_om > 0)
         if lobes.none(active):
-            return bs, mi.Spectrum(0.0)
-        if use_mf and not use_diffuse and self.table is None:
-            return bs, self._sample_microfacet(si, wi, sample1, sample2, active, bs)
-        # sample1 picks the microfacet normals with probability p (and, rescaled, a facet of
-        # the V-groove, or which lobe the cosine sample stands for); the weight is f·cosθo
-        # over the mixture density.
-        at_wi = self._at_wi(si, wi, active, use_mf, use_diffuse)
-        p = at_wi[0] if use_mf else 0.0
-        pick = (sample1 < p) if use_mf else False
+            return None
+        distr = self.distribution(si, active)
+        masking = self.masking(distr)
+        D = distr.ndf(m)
+        G = masking.G(wi, wo, m, cos_im, cos_om)
+        # the density of ωo: visible normals or D·cosθm, through the reflection's Jacobian
+        if self.sample_visible:
+            pdf = microfacet.pdf_visible_reflection(D, masking.G1(wi, m, cos_im), wi)
+        else:
+            pdf = microfacet.pdf_ndf(D, m) * microfacet.reflection_jacobian(wo, m)
+        return SimpleNamespace(m=m, cos_im=cos_im, cos_om=cos_om, D=D, G=G, masking=masking,
+                               pdf=pdf, active=active)
 
-        def reflected():
-            u_facet = mixture.rescale(sample1, p)
-            return vector.reflect(wi, self._sample_normal(si, wi, active, sample2, u_facet))
+    def sample(self, ctx, si, sample1, sample2, active):
+        """ωi reflected about a microfacet normal: visible normals of the masking (``sample1``
+        picks the V-cavity's facet), or D·cosθm."""
+        distr = self.distribution(si, active)
+        if self.sample_visible:
+            m = self.masking(distr).sample_visible(si.wi, sample2, sample1)
+        else:
+            m = distr.sample(sample2)
+        wo = vector.reflect(si.wi, m)
+        return wo, wo.z > 0
 
-        bs.wo = lobes.choose(pick, reflected,
-                             lambda: mi.warp.square_to_cosine_hemisphere(sample2))
-        glossy = pick | self._cosine_is_glossy(sample1, p, at_wi, use_mf, use_diffuse)
-        bs.sampled_type = dr.select(glossy, mi.UInt32(lobes.flag("GlossyReflection")),
-                                    mi.UInt32(lobes.flag("DiffuseReflection")))
-        bs.sampled_component = dr.select(glossy, mi.UInt32(0), mi.UInt32(1))
-        bs.eta = 1.0
-        value, bs.pdf = self.eval_pdf(ctx, si, bs.wo, active, at_wi)
-        return bs, lobes.weight(value, bs.pdf, active)
-
-    def _at_wi(self, si, wi, active, use_mf, use_diffuse):
-        """
-        What the lobes need of ωi alone: (the probability of the microfacet-normal sampler;
-        of a cosine sample, the probability that it stands for the compensation lobe rather
-        than the diffuse base; the compensation's ks·F_ms·(1 − E(μi))/(π (1 − E_avg)), or
-        None). The weights are the lobes' albedos: mean(ks·F(cosθi)) of the single scattering
-        without compensation, with it mean(ks·F_avg)·E(μi) (F_avg is at hand; a weight
-        needs no exact value), mean(ks·F_ms)·(1 − E(μi)) of the compensation, mean(ρd) of
-        the diffuse base.
-        """
-        w_normal, w_ms, w_diffuse, ms_scale = 0.0, 0.0, 0.0, None
-        if use_mf and self.table is None:
-            w_normal = dr.mean(self._specular(si, wi.z, 1.0, active))
-        elif use_mf:  # F_avg, which the compensation needs anyway, stands for F(cosθi)
-            ms_scale, e_i, e_avg, ks_f_avg = self._compensation(si, wi, active)
-            w_normal = dr.mean(ks_f_avg) * e_i
-            w_ms = dr.mean(ms_scale) * (dr.pi * dr.maximum(1.0 - e_avg, 0.0))
-        if use_diffuse:
-            w_diffuse = dr.mean(self.diffuse.eval(si, active))
-        p_normal = mixture.probability(w_normal, w_ms + w_diffuse, 1.0 if use_mf else 0.0)
-        return p_normal, mixture.probability(w_ms, w_diffuse, 0.0), ms_scale
-
-    def _cosine_is_glossy(self, sample1, p, at_wi, use_mf, use_diffuse):
-        """Whether a cosine-hemisphere sample stands for the compensation lobe (glossy,
-        component 0) rather than the diffuse base: ``sample1``, past ``p``, rescaled to
-        [0, 1) and compared with the compensation's share of the two lobes' albedos."""
-        if not (use_mf and self.table is not None):
-            return False
-        if not use_diffuse:
-            return True
-        u = (sample1 - p) / dr.maximum(1.0 - p, 1e-30)
-        return u < at_wi[1]
-
-    def _albedos(self, si, mu, active):
-        """(E(μ), E_avg) at the roughness at ``si``."""
-        return self.albedos(mu, lambda: self.distribution(si, active))
-
-    def _compensation(self, si, wi, active):
-        """(ks·F_ms·(1 − E(μi))/(π (1 − E_avg)), E(μi), E_avg, ks·F_avg) of Kulla & Conty's
-        lobe."""
-        e_i, e_avg = self._albedos(si, wi.z, active)
-        ks = self.specular.eval(si, active)
-        f_avg = None
+    def weight(self, ctx, si, active):
+        """mean(ks·F(cosθi)); with the albedo table, mean(ks·F_avg)·E(μi) (F_avg, which a
+        compensation needs anyway, stands for F(cosθi))."""
+        if self.table is None:
+            return dr.mean(self._ks_f(si, si.wi.z, 1.0, active))
+        ks_f_avg = properties.clip_at(self.specular, si, active)
         if self.fresnel != "none":
-            f_avg = self.f_avg if self.f_avg is not None else \
-                self._fresnel_average(si, active)
-        factor = self.ms_factor if self.ms_factor is not None else \
-            self._ms_factor(f_avg, e_avg)
-        scale = ks * (factor * dr.maximum(1.0 - e_i, 0.0))
-        return scale, e_i, e_avg, ks if f_avg is None else ks * f_avg
+            ks_f_avg = ks_f_avg * self.fresnel_average(si, active)
+        return dr.mean(ks_f_avg) * self.albedo(si, si.wi.z, active)[0]
 
-    @staticmethod
-    def _ms_factor(f_avg, e_avg):
-        """F_ms/(π (1 − E_avg)): the compensation lobe's factor besides ks and the (1 − E)."""
-        factor = multiscatter.lobe(0.0, 0.0, e_avg)
-        return factor if f_avg is None else factor * multiscatter.multiple_fresnel(f_avg, e_avg)
+    def albedo(self, si, mu, active):
+        """(E(μ), E_avg) of the lobe with F ≡ 1 (from its table) at the roughness at ``si``."""
+        return self.table(mu, lambda: multiscatter.equivalent_alpha(
+            self.distribution(si, active)))
+
+    def fresnel_average(self, si, active):
+        """F_avg of the Fresnel term at ``si``, per channel (None for ``fresnel`` 'none')."""
+        if self.fresnel == "none":
+            return None
+        return self.f_avg if self.f_avg is not None else self._fresnel_average(si, active)
 
     def _fresnel_average(self, si, active):
-        """F_avg of the Fresnel term at ``si``, per channel."""
-        eta, k = self.eta.eval(si, active), self.k.eval(si, active)
+        eta = properties.clip_at(self.eta, si, active, 0.0, dr.inf)
+        k = properties.clip_at(self.k, si, active, 0.0, dr.inf)
         if self.fresnel == "exact":
             return multiscatter.fresnel_average(eta, k)
         return multiscatter.schlick_average(fresnel.r0(eta, k))
 
-    def _sample_microfacet(self, si, wi, sample1, sample2, active, bs):
-        """Fill ``bs`` from the microfacet lobe alone; returns the weight in closed form."""
-        # a microfacet normal m, and ωo = ωi reflected about it
-        m = self._sample_normal(si, wi, active, sample2, sample1)
-        bs.wo = wo = vector.reflect(wi, m)
-        bs.sampled_type = mi.UInt32(lobes.flag("GlossyReflection"))
-        bs.sampled_component = mi.UInt32(0)
-        bs.eta = 1.0
-        # the terms at ωo as stored, so that bs.pdf = pdf(bs.wo)
-        active = active & (wo.z > 0)
-        if lobes.none(active):
-            return mi.Spectrum(0.0)
-        weight, bs.pdf = self._microfacet(si, wi, wo, active, weight=True)
-        return dr.select(active, lobes.depolarize(weight), 0.0)
-
-    def _sample_normal(self, si, wi, active, sample2, u_facet):
-        """A microfacet normal: D·cosθ, Smith's visible normals of ωi, or the V-cavity's
-        (whose facet of the V-groove ``u_facet`` picks)."""
-        distr = self.distribution(si, active)
-        if not self.sample_visible:
-            return distr.sample(sample2)
-        if self.shadowing == "smith":
-            return distr.sample_visible(wi, sample2)
-        return distr.sample_vcavity_visible(wi, sample2, u_facet)
-
-    def _microfacet(self, si, wi, wo, active, weight=False):
-        """
-        (f·cosθo, pdf) of the microfacet lobe for ωi, ωo above the surface; with ``weight``
-        (for :meth:`sample`) (f·cosθo/pdf, pdf), in closed form where D and 4 cosθi cancel:
-        ks·F·G1(ωo) (Smith's visible normals), ks·F·G/G1(ωi) (the V-cavity's),
-        ks·F·G·(ωo·m)/(cosθi cosθm) (D·cos).
-        """
-        m = vector.half_vector(wi, wo)
-        cos_im, cos_om = vector.dot(wi, m), vector.dot(wo, m)
-        # Both directions must see the front of the facet: false only when rounding makes
-        # ωi + ωo vanish (grazing, nearly opposite directions).
-        active = active & (cos_im > 0) & (cos_om > 0)
-        if lobes.none(active):
-            return mi.Spectrum(0.0), mi.Float(0.0)
-        distr = self.distribution(si, active)
-        # D, the masking-shadowing G, and G1(ωi) of the visible normals
-        D = distr.ndf(m)
-        if self.shadowing == "smith":
-            g1_wi = distr.smith_g1_mitsuba(wi, m, cos_im)
-            g1_wo = distr.smith_g1_mitsuba(wo, m, cos_om)
-            G = g1_wi * g1_wo
-        else:
-            G = microfacet.vcavity_g(wi, wo, m)
-            g1_wi = microfacet.vcavity_g1(wi, m) if self.sample_visible else None
-        # the density of ωo: visible normals or D·cosθm, through the reflection's Jacobian
-        if self.sample_visible:
-            pdf = microfacet.pdf_visible_reflection(D, g1_wi, wi)
-        else:
-            pdf = microfacet.pdf_ndf(D, m) * microfacet.reflection_jacobian(wo, m)
-        # f·cosθo = ks F D G / (4 cosθi cosθo) · cosθo, or the sample weight
-        if not weight:
-            factor = D * G / (4.0 * wi.z)
-        elif not self.sample_visible:
-            factor = G * cos_om / dr.maximum(wi.z * m.z, 1e-30)
-        elif self.shadowing == "smith":
-            factor = g1_wo
-        else:
-            factor = G / dr.maximum(g1_wi, 1e-30)
-        if weight:
-            active = active & (pdf > 0)
-        value = self._specular(si, cos_im, factor, active)
-        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
-
-    def _specular(self, si, cos_theta, factor, active):
+    def _ks_f(self, si, cos_theta, factor, active):
         """ks·factor·F(cosθ), F at the cosine between ωi and the facet normal."""
-        value = self.specular.eval(si, active) * factor
+        value = properties.clip_at(self.specular, si, active) * factor
         if self.fresnel_term is not None:
-            value = value * self.fresnel_term(cos_theta, self.eta.eval(si, active),
-                                              self.k.eval(si, active))
+            value = value * self.fresnel_term(
+                cos_theta, properties.clip_at(self.eta, si, active, 0.0, dr.inf),
+                properties.clip_at(self.k, si, active, 0.0, dr.inf))
         return value
+
+
+class Compensation(lobes.CosineLobe):
+    """
+    Kulla & Conty's energy compensation (2017, after Kelemen & Szirmay-Kalos 2001) of a
+    :class:`MicrofacetReflection` ``source`` that has its albedo table: the light the single
+    scattering loses, given back by ks·F_ms·(1 − E(μi))(1 − E(μo))/(π (1 − E_avg))
+    (:mod:`~mi_brdfs.scattering.multiscatter`), the same component as the source's; sampled
+    from the cosine-weighted hemisphere, whose density (1 − E(μo)) cosθo is close to.
+    """
+
+    kind = "GlossyReflection"
+
+    def __init__(self, source: MicrofacetReflection):
+        self.source, self.component, self.flags = source, source.component, source.flags
+        #: F_ms/(π (1 − E_avg)) where the roughness and F_avg are constants as well
+        self.factor = None
+        f_avg = source.f_avg if source.fresnel != "none" else 1.0
+        if source.table.row is not None and f_avg is not None:
+            self.factor = _factor(None if source.fresnel == "none" else f_avg,
+                                  source.table.row_average)
+            dr.make_opaque(self.factor)
+
+    def _scale(self, si, active):
+        """(ks·F_ms·(1 − E(μi))/(π (1 − E_avg)), E_avg): what the lobe's value takes of ωi."""
+        e_i, e_avg = self.source.albedo(si, si.wi.z, active)
+        factor = self.factor if self.factor is not None else \
+            _factor(self.source.fresnel_average(si, active), e_avg)
+        ks = properties.clip_at(self.source.specular, si, active)
+        return ks * (factor * dr.maximum(1.0 - e_i, 0.0)), e_avg
+
+    def value(self, si, wo, active):
+        e_o = self.source.albedo(si, wo.z, active)[0]
+        return self._scale(si, active)[0] * (dr.maximum(1.0 - e_o, 0.0) * wo.z)
+
+    def weight(self, ctx, si, active):
+        """Its albedo: mean(ks·F_ms)·(1 − E(μi))."""
+        scale, e_avg = self._scale(si, active)
+        return dr.mean(scale) * (dr.pi * dr.maximum(1.0 - e_avg, 0.0))
+
+
+def _factor(f_avg, e_avg):
+    """F_ms/(π (1 − E_avg)): the compensation's factor besides ks and the (1 − E)s; F_ms = 1
+    without a Fresnel term (``f_avg`` None)."""
+    factor = multiscatter.lobe(0.0, 0.0, e_avg)
+    return factor if f_avg is None else factor * multiscatter.multiple_fresnel(f_avg, e_avg)

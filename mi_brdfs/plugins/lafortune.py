@@ -87,6 +87,36 @@ def _check_magnitude(i: int, coefficients, n: float) -> None:
                              f"or the coefficients, or set normalize = true")
 
 
+class Glossy(lobes.Lobe):
+    """
+    One generalized cosine lobe, ρs·K·rⁿ·cosⁿβ·cosθo, β the angle to its principal direction
+    d = C∘ωi/r (``constants``: its :class:`~mi_brdfs.scattering.lafortune.Lobe`), sampled by
+    cosⁿβ about d.
+    """
+
+    kind = "GlossyReflection"
+
+    def __init__(self, specular, constants, component: int, flags: int):
+        self.specular, self.constants = specular, constants
+        self.component, self.flags = component, flags
+
+    def eval_pdf(self, ctx, si, wo, active):
+        active = active & (si.wi.z > 0) & (wo.z > 0)  # one-sided, like `diffuse`
+        # ρs·K·rⁿ·cosⁿβ·cosθo, and the density of the cosⁿ lobe about its principal direction
+        f, pdf = terms.lobe_value(wo, *terms.axis(si.wi, self.constants), self.constants)
+        value = properties.clip_at(self.specular, si, active) * (f * wo.z)
+        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        d, _ = terms.axis(si.wi, self.constants)
+        return terms.sample(d, sample2, self.constants.inv_n1), True
+
+    def weight(self, ctx, si, active):
+        """mean(ρs)·K·rⁿ·2π/(n+2): the lobe's albedo were d the normal; it follows ωi."""
+        return dr.mean(properties.clip_at(self.specular, si, active)) * \
+            self.constants.albedo_scale * terms.axis(si.wi, self.constants)[1]
+
+
 class Lafortune(mi.BSDF):
     r"""
     .. _bsdf-lafortune:
@@ -210,30 +240,14 @@ class Lafortune(mi.BSDF):
                 values.append(mi.Float(x))
             self.m_specular_reflectance.append(properties.reflectance(
                 props, PLUGIN, f"specular_reflectance_{i}", LOBE_DEFAULTS["specular_reflectance"]))
-        self._set_components(anisotropic)
+        # Terms in component order, the diffuse one first; one whose reflectance is the
+        # constant 0 is left out
+        self._has_diffuse = not properties.is_zero(self.m_diffuse_reflectance)
+        self._present = [not properties.is_zero(rho) for rho in self.m_specular_reflectance]
+        self._flags = [GLOSSY_FLAGS | (ANISOTROPIC if a else 0) for a in anisotropic]
         self.parameters_changed()
+        self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
         self._warn_energy(props)
-
-    def _set_components(self, anisotropic):
-        """Components in order, diffuse first; a lobe whose reflectance is the constant 0 is
-        left out (``self._component[i]`` None), as is a zero diffuse term; ``anisotropic``:
-        per lobe, whether Cx ≠ Cy."""
-        components = []
-        self._diffuse = None
-        if not properties.is_zero(self.m_diffuse_reflectance):
-            self._diffuse = 0
-            components.append(lobes.flag("DiffuseReflection", "FrontSide"))
-        self._component = []
-        for i, rho in enumerate(self.m_specular_reflectance):
-            if properties.is_zero(rho):
-                self._component.append(None)
-                continue
-            self._component.append(len(components))
-            components.append(GLOSSY_FLAGS | (ANISOTROPIC if anisotropic[i] else 0))
-        self.m_components = components  # a copy crosses to C++: assign, don't append
-        self.m_flags = 0
-        for c in components:
-            self.m_flags |= c
 
     def _warn_energy(self, props):
         """Warn (values kept) where ρd + Σ ρs,i·K·2π/(n+2), the bound of the albedo, exceeds
@@ -251,107 +265,29 @@ class Lafortune(mi.BSDF):
                                     f"reaches {total:g} > 1: the BSDF may reflect more light "
                                     f"than it receives; values kept")
 
-    eval, pdf = lobes.eval_half, lobes.pdf_half
-    eval_diffuse_reflectance = lobes.two_lobes_diffuse_reflectance
-
-    def _enabled(self, ctx):
-        """(diffuse: bool, the indices of the lobes) that exist and the context asks for."""
-        diffuse = self._diffuse is not None and \
-            ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, self._diffuse)
-        return diffuse, [i for i, c in enumerate(self._component)
-                         if c is not None and ctx.is_enabled(mi.BSDFFlags.GlossyReflection, c)]
-
-    def _strategies(self, si, enabled):
-        """({lobe: (principal direction, rⁿ)} at si.wi, the probability of each strategy:
-        the enabled lobes, then the diffuse term if enabled)."""
-        has_diffuse, ids = enabled
-        axes = {i: terms.axis(si.wi, self._lobes[i]) for i in ids}
-        weights = [self._mean_specular[i] * self._lobes[i].albedo_scale * axes[i][1]
-                   for i in ids] + ([self._mean_diffuse] if has_diffuse else [])
-        return axes, terms.probabilities(weights)
-
-    def sample(self, ctx, si, sample1, sample2, active=True):
-        bs, sample2 = lobes.new_sample(), lobes.point2(sample2)
-        enabled = self._enabled(ctx)
-        if not (enabled[0] or enabled[1]):
-            return bs, mi.Spectrum(0.0)
-        active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
-        if lobes.none(active):
-            return bs, mi.Spectrum(0.0)
-        strategies = self._strategies(si, enabled)
-        # sample1 picks a strategy in proportion to its weight; sample2 draws ωo from it
-        self._draw(bs, strategies, enabled, sample1, sample2)
-        # bs.pdf: the mixture density at ωo; weight = f·cosθo / pdf, 0 below the horizon
-        value, bs.pdf = self._eval_pdf(si, bs.wo, active, enabled, strategies)
-        return bs, lobes.weight(value, bs.pdf, active)
-
-    def _draw(self, bs, strategies, enabled, sample1, sample2):
-        """Fill ``bs``: ωo from the cosⁿ lobe about the principal direction of the lobe that
-        ``sample1`` picks, or from the cosine-weighted hemisphere (the last strategy, where the
-        diffuse term is enabled: with one lobe, the lobe is picked where sample1 < its
-        probability, as ``phong`` does); its type and component, η = 1."""
-        has_diffuse, ids = enabled
-        axes, probs = strategies
-        k = terms.choose(probs, sample1)
-        is_diffuse = (k == len(ids)) if has_diffuse and ids else not ids
-        d, inv_n1, component = (axes[ids[0]][0], self._lobes[ids[0]].inv_n1,
-                                mi.UInt32(self._component[ids[0]])) if ids else (None,) * 3
-        for j, i in enumerate(ids[1:], start=1):  # each further lobe, where k picks it
-            hit = k == j
-            d = dr.select(hit, axes[i][0], d)
-            inv_n1 = dr.select(hit, self._lobes[i].inv_n1, inv_n1)
-            component = dr.select(hit, mi.UInt32(self._component[i]), component)
-        bs.wo = lobes.choose(is_diffuse, lambda: mi.warp.square_to_cosine_hemisphere(sample2),
-                             lambda: terms.sample(d, sample2, inv_n1))
-        bs.sampled_type = dr.select(is_diffuse, mi.UInt32(lobes.flag("DiffuseReflection")),
-                                    mi.UInt32(lobes.flag("GlossyReflection")))
-        bs.sampled_component = dr.select(is_diffuse, mi.UInt32(self._diffuse or 0),
-                                         component if ids else mi.UInt32(0))
-        bs.eta = 1.0
-
-    def eval_pdf(self, ctx, si, wo, active=True):
-        enabled = self._enabled(ctx)
-        if not (enabled[0] or enabled[1]):
-            return mi.Spectrum(0.0), mi.Float(0.0)
-        return self._eval_pdf(si, lobes.vector(wo), active, enabled)
-
-    def _eval_pdf(self, si, wo, active, enabled, strategies=None):
-        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the ``enabled`` terms."""
-        has_diffuse, ids = enabled
-        cos_theta_o = wo.z
-        active = active & (si.wi.z > 0) & (cos_theta_o > 0)  # one-sided, like `diffuse`
-        axes, probs = strategies or self._strategies(si, enabled)
-        value, pdfs = 0.0, []
-        for i in ids:
-            # ρs·K·rⁿ·cosⁿβ·cosθo, and the density of the cosⁿ lobe about its principal direction
-            f, pdf = terms.lobe_value(wo, *axes[i], self._lobes[i])
-            value = value + self.m_specular_reflectance[i].eval(si, active) * (f * cos_theta_o)
-            pdfs.append(pdf)
-        if has_diffuse:
-            # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
-            pdfs.append(dr.inv_pi * cos_theta_o)
-            value = value + self.m_diffuse_reflectance.eval(si, active) * pdfs[-1]
-        return lobes.finish(value, terms.mixture_pdf(probs, pdfs), active)
+    # the lobes and the diffuse term, each with its sampler, mixed by their albedos
+    sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
+    eval_diffuse_reflectance = lobes.eval_diffuse_reflectance
 
     def parameters_changed(self, keys=()):
-        """Precompute each lobe's constants and the means that weigh the strategies."""
+        """Each lobe's constants (opaque: a changed parameter updates the kernel's inputs
+        instead of recompiling it), and the terms; sampling takes the lobes first."""
         self._lobes = [terms.Lobe(*params, self.m_normalize) for params in
                        zip(self.m_cx, self.m_cy, self.m_cz, self.m_exponent)]
-        # Strategy weights use the textures' means (as Mitsuba's roughplastic and Mitsuba
-        # 0.6's phong): constant per BSDF, so nothing to evaluate per call.
-        self._mean_diffuse = mi.Float(dr.detach(self.m_diffuse_reflectance.mean()))
-        self._mean_specular = [mi.Float(dr.detach(rho.mean()))
-                               for rho in self.m_specular_reflectance]
-        # opaque: a changed parameter updates the kernel's inputs instead of recompiling it
-        dr.make_opaque(self._mean_diffuse, *self._mean_specular,
-                       *[v for lobe in self._lobes for v in lobe.arrays()])
+        dr.make_opaque(*[v for lobe in self._lobes for v in lobe.arrays()])
+        present = [i for i, p in enumerate(self._present) if p]
+        glossy = [Glossy(self.m_specular_reflectance[i], self._lobes[i], component,
+                         self._flags[i])
+                  for component, i in enumerate(present, start=int(self._has_diffuse))]
+        diffuse = [lobes.Diffuse(self.m_diffuse_reflectance)] if self._has_diffuse else []
+        self.lobes = lobes.Mixture(glossy + diffuse)
 
     def traverse(self, cb):
         # Only the parameters of terms that exist: the lobe structure is fixed at load time.
-        if self._diffuse is not None:
+        if self._has_diffuse:
             cb.put("diffuse_reflectance", self.m_diffuse_reflectance, DIFFERENTIABLE)
-        for i, component in enumerate(self._component):
-            if component is None:
+        for i, present in enumerate(self._present):
+            if not present:
                 continue
             cb.put(f"specular_reflectance_{i}", self.m_specular_reflectance[i], DIFFERENTIABLE)
             if dr.is_jit_v(mi.Float):  # a Python float cannot be updated in scalar variants

@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-import drjit as dr
 import mitsuba as mi
 
 from . import lobes, properties
-
-FLAGS = lobes.flag("DiffuseReflection", "FrontSide")
 
 
 class Lambert(mi.BSDF):
@@ -53,30 +50,12 @@ class Lambert(mi.BSDF):
         super().__init__(props)
         #: Diffuse albedo ρ.
         self.m_reflectance = properties.reflectance(props, "lambert", "reflectance", 0.5)
-        self.m_flags = FLAGS
-        self.m_components = [FLAGS]
+        self.lobes = lobes.Mixture([lobes.Diffuse(self.m_reflectance)])
+        self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
 
-    # ωo from the cosine-weighted hemisphere, pdf cosθo/π
-    sample = lobes.diffuse_sample
-    eval, pdf = lobes.diffuse_eval, lobes.diffuse_pdf
-    eval_pdf = lobes.diffuse_eval_pdf
-
-    def _sample_weight(self, si, wo, active):
-        """f·cosθo / pdf = (ρ/π·cosθo) / (cosθo/π) = ρ."""
-        return self.m_reflectance.eval(si, active)
-
-    def _eval_pdf(self, si, wo, active):
-        """(f·cosθo, pdf) at ``wo``, for eval, pdf and eval_pdf."""
-        wo = lobes.vector(wo)
-        active = active & (si.wi.z > 0) & (wo.z > 0)  # one-sided, like `diffuse`
-        # f·cosθo = ρ/π·cosθo, in diffuse's order of operations; pdf: the cosine-weighted
-        # hemisphere's
-        value = self.m_reflectance.eval(si, active) * dr.inv_pi * wo.z
-        pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
-        return lobes.finish(value, pdf, active)
-
-    def eval_diffuse_reflectance(self, si, active=True):
-        return self.m_reflectance.eval(si, active)
+    # one lobe: ωo from the cosine-weighted hemisphere, pdf cosθo/π, weight ρ
+    sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
+    eval_diffuse_reflectance = lobes.eval_diffuse_reflectance
 
     def traverse(self, cb):
         cb.put("reflectance", self.m_reflectance, mi.ParamFlags.Differentiable)

@@ -1,11 +1,20 @@
 """
-What the plugins' ``mi.BSDF`` classes share beyond the maths: the lobe flags, the choice between
-two lobes when sampling (the one-sample mixture of :mod:`mi_brdfs.scattering.mixture`), the sample
-record of a one-lobe diffuse model, and the methods several classes take as they are.
+The shape every plugin has: a BSDF is a :class:`Mixture` of :class:`Lobe` s. A lobe is one term
+of f with the strategy that samples it (a Lambertian base and the cosine-weighted hemisphere, a
+microfacet lobe and its normals, a compensation lobe, each of Lafortune's cosine lobes); the
+mixture picks one strategy per sample in proportion to the lobes' albedo estimates at ωi, and
+its density is the mixture of theirs (Veach 1997, "Robust Monte Carlo Methods for Light
+Transport Simulation", §9.2.4, the one-sample model), so that ``bs.pdf`` = ``pdf(bs.wo)`` and
+the weight is f·cosθo over that density by construction.
 
-Everything here looks ``mi.*`` up when it is called, so one definition serves every variant, and
-its meaning is the same in each: a Python ``bool`` mask is configuration (or a scalar variant's
-one lane), anything else an array traced for all lanes.
+A plugin class sets ``self.lobes`` (a :class:`Mixture`) and takes :func:`sample`, :func:`eval`,
+:func:`pdf`, :func:`eval_pdf` and :func:`eval_diffuse_reflectance` as its methods
+(``sample = lobes.sample``: nanobind allows a single base class, the variant's ``mi.BSDF``, so
+they come as class attributes, not from a mixin).
+
+Everything here looks ``mi.*`` up when it is called, so one definition serves every variant.
+A Python ``bool`` mask is configuration (or a scalar variant's one lane), anything else an
+array traced for all lanes.
 """
 
 from __future__ import annotations
@@ -13,7 +22,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .properties import is_zero
+from ..scattering import mixture
 
 
 def flag(*names: str) -> int:
@@ -22,16 +31,6 @@ def flag(*names: str) -> int:
     for name in names:
         value |= int(getattr(mi.BSDFFlags, name))
     return value
-
-
-def choose(mask, a, b):
-    """
-    ``select(mask, a(), b())``. Where ``mask`` is a Python bool only the branch needed is
-    computed; else both are traced, as every lane may need either.
-    """
-    if type(mask) is bool:
-        return a() if mask else b()
-    return dr.select(mask, a(), b())
 
 
 def none(active) -> bool:
@@ -44,16 +43,20 @@ def none(active) -> bool:
     return type(active) is bool and not active
 
 
+def choose(mask, a, b):
+    """
+    ``select(mask, a(), b())``. Where ``mask`` is a Python bool only the branch needed is
+    computed; else both are traced, as every lane may need either.
+    """
+    if type(mask) is bool:
+        return a() if mask else b()
+    return dr.select(mask, a(), b())
+
+
 def depolarize(value):
     """A spectrum as the variant returns BSDF values: a depolarizing Mueller matrix in polarized
     variants, itself elsewhere."""
     return mi.depolarizer(value) if mi.is_polarized else value
-
-
-def new_sample():
-    """A zeroed ``mi.BSDFSample3f`` (a default-constructed one has width-0 fields in JIT
-    variants, which fail inside ``mi.render``)."""
-    return dr.zeros(mi.BSDFSample3f)
 
 
 def vector(v):
@@ -72,172 +75,230 @@ def weight(value, pdf, active):
     return dr.select(ok, value / dr.select(ok, pdf, 1.0), 0.0)
 
 
-def finish(value, pdf, active):
-    """(f·cosθo, pdf) as ``eval_pdf`` returns them: depolarized, and 0 where inactive."""
-    return dr.select(active, depolarize(value), 0.0), dr.select(active, pdf, 0.0)
-
-
-# Methods that several plugin classes share. nanobind allows a single base class (the variant's
-# mi.BSDF), so a plugin takes them as class attributes (``eval = lobes.eval_half``), not
-# from a mixin.
-
-def eval_half(self, ctx, si, wo, active=True):
-    """``eval`` of a plugin whose ``eval_pdf`` does the work (in JIT variants the unused pdf
-    is not computed: the trace drops it)."""
-    return self.eval_pdf(ctx, si, wo, active)[0]
-
-
-def pdf_half(self, ctx, si, wo, active=True):
-    """``pdf`` of a plugin whose ``eval_pdf`` does the work."""
-    return self.eval_pdf(ctx, si, wo, active)[1]
-
-
-# -------------------------------------------------------------------------------------------------
-# One diffuse lobe (lambert, orennayar)
-# -------------------------------------------------------------------------------------------------
-
-def cosine_sample(bs, sample2):
+class Lobe:
     """
-    Fill ``bs`` for a one-lobe diffuse model: ωo from the cosine-weighted hemisphere, pdf
-    cosθo/π, component 0; returns (ωo, pdf).
+    One term of a BSDF and the strategy that samples it. A lobe answers for one component of
+    the plugin (``component``, of type ``kind``, a ``mi.BSDFFlags`` name, and flags ``flags``),
+    and works in the local frame (normal +z) with ``si.wi`` and ``wo`` as Mitsuba hands them.
+    Subclasses give :meth:`eval_pdf`, :meth:`sample` and :meth:`weight`; the rest has
+    defaults.
     """
-    bs.wo = wo = mi.warp.square_to_cosine_hemisphere(point2(sample2))
-    bs.pdf = pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
-    bs.eta = 1.0
-    bs.sampled_type = mi.UInt32(flag("DiffuseReflection"))
-    bs.sampled_component = mi.UInt32(0)
-    return wo, pdf
+
+    #: The index of the component the lobe answers for, its type and its flags.
+    component: int = 0
+    kind: str = "DiffuseReflection"
+    flags: int = 0
+
+    def enabled(self, ctx) -> bool:
+        """Whether the context asks for this lobe (a Python bool: configuration)."""
+        return ctx.is_enabled(getattr(mi.BSDFFlags, self.kind), self.component)
+
+    def component_flags(self) -> dict:
+        """{component index: its flags} of the components the lobe answers for."""
+        return {self.component: self.flags}
+
+    def eval_pdf(self, ctx, si, wo, active):
+        """(f·|cosθo| of this term, density of :meth:`sample` at ``wo``), both 0 where not
+        ``active`` or outside the lobe; f not depolarized (the mixture does it once)."""
+        raise NotImplementedError
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        """(ωo, valid): a direction from the lobe's strategy, and where that succeeded.
+        ``sample1`` ∈ [0, 1) is the lobe's own (rescaled by the mixture that picked it)."""
+        raise NotImplementedError
+
+    def weight(self, ctx, si, active):
+        """The lobe's albedo at ωi, or a bound or estimate of it, as one number per lane (the
+        mean over channels): the mixture samples the lobe in proportion to it."""
+        raise NotImplementedError
+
+    def record(self, si, wo):
+        """(sampled_type, sampled_component, η) of a sample at ``wo``: the lobe's own type and
+        component, η = 1 (a lobe that refracts says which it did)."""
+        return mi.UInt32(flag(self.kind)), mi.UInt32(self.component), mi.Float(1.0)
+
+    def sample_weight(self, ctx, si, wo, active):
+        """(f·|cosθo|/pdf, pdf) at a sampled ``wo`` when the lobe is sampled alone; lobes whose
+        weight has a closed form (where D or the cosine cancels) give it here."""
+        value, pdf = self.eval_pdf(ctx, si, wo, active)
+        return weight(value, pdf, active), pdf
+
+    def diffuse_reflectance(self, si, active):
+        """The albedo of a diffuse term (``eval_diffuse_reflectance``), None for other lobes."""
+        return None
 
 
-def diffuse_sample(self, ctx, si, sample1, sample2, active=True):
+class CosineLobe(Lobe):
     """
-    ``sample`` of a one-lobe diffuse model: ωo from the cosine-weighted hemisphere, and the
-    weight f·cosθo / pdf that the class's ``_sample_weight(si, wo, active)`` gives (ρ for
-    Lambert, where the cosines and π cancel).
+    A lobe sampled from the cosine-weighted hemisphere (density cosθo/π), one-sided: the
+    Lambertian base and the terms smooth in ωo. Subclasses give :meth:`value`, f·cosθo where
+    both directions are above the surface.
     """
-    bs = new_sample()
-    if not ctx.is_enabled(mi.BSDFFlags.DiffuseReflection):
-        return bs, mi.Spectrum(0.0)
-    active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
-    if none(active):
-        return bs, mi.Spectrum(0.0)
-    wo, pdf = cosine_sample(bs, sample2)
-    weight = self._sample_weight(si, wo, active)
-    return bs, dr.select(active & (pdf > 0), depolarize(weight), 0.0)
+
+    kind, flags = "DiffuseReflection", flag("DiffuseReflection", "FrontSide")
+
+    def value(self, si, wo, active):
+        raise NotImplementedError
+
+    def eval_pdf(self, ctx, si, wo, active):
+        active = active & (si.wi.z > 0) & (wo.z > 0)  # one-sided: the local frame's z is cosθ
+        if none(active):
+            return mi.Spectrum(0.0), mi.Float(0.0)
+        pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
+        return dr.select(active, self.value(si, wo, active), 0.0), dr.select(active, pdf, 0.0)
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        return mi.warp.square_to_cosine_hemisphere(sample2), True
 
 
-def diffuse_eval(self, ctx, si, wo, active=True):
-    """``eval`` of a one-lobe diffuse model: 0 where the context disables the lobe, else the
-    class's ``_eval_pdf(si, wo, active)``."""
-    if not ctx.is_enabled(mi.BSDFFlags.DiffuseReflection):
-        return mi.Spectrum(0.0)
-    return self._eval_pdf(si, wo, active)[0]
+class Diffuse(CosineLobe):
+    """The Lambertian lobe ρ/π (``reflectance``: a texture of ρ), in Mitsuba ``diffuse``'s
+    order of operations, so that a plugin of this lobe alone is bit-identical to it."""
+
+    def __init__(self, reflectance, component: int = 0):
+        self.reflectance, self.component = reflectance, component
+
+    def rho(self, si, active):
+        from .properties import clip_at
+        return clip_at(self.reflectance, si, active)
+
+    def value(self, si, wo, active):
+        return self.rho(si, active) * dr.inv_pi * wo.z
+
+    def weight(self, ctx, si, active):
+        return dr.mean(self.rho(si, active))
+
+    def sample_weight(self, ctx, si, wo, active):
+        """ρ: the cosines and π cancel (what ``diffuse`` returns)."""
+        pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
+        return self.rho(si, active), pdf
+
+    def diffuse_reflectance(self, si, active):
+        return self.rho(si, active)
 
 
-def diffuse_pdf(self, ctx, si, wo, active=True):
-    """``pdf`` of a one-lobe diffuse model (:func:`diffuse_eval`)."""
-    if not ctx.is_enabled(mi.BSDFFlags.DiffuseReflection):
-        return mi.Float(0.0)
-    return self._eval_pdf(si, wo, active)[1]
-
-
-def diffuse_eval_pdf(self, ctx, si, wo, active=True):
-    """``eval_pdf`` of a one-lobe diffuse model (:func:`diffuse_eval`)."""
-    if not ctx.is_enabled(mi.BSDFFlags.DiffuseReflection):
-        return mi.Spectrum(0.0), mi.Float(0.0)
-    return self._eval_pdf(si, wo, active)
-
-
-# -------------------------------------------------------------------------------------------------
-# A diffuse and a glossy lobe (phong, ward, ashikhmin)
-# -------------------------------------------------------------------------------------------------
-
-def set_two_lobes(self, diffuse, specular, glossy_flags: int) -> None:
+class Mixture:
     """
-    The components of a two-lobe reflection model, in order (diffuse, glossy), of the lobes
-    whose reflectance is not the constant 0 (a lobe that is 0 is left out entirely); their
-    indices in ``self._diffuse``, ``self._glossy`` (None: absent).
+    The lobes of one BSDF, in component order; :meth:`sample` and :meth:`eval_pdf` run the
+    lobes the context enables. ``two_sided``: ωi may come from below the surface (a
+    transmitting interface); else the BSDF is 0 for ωi below, as Mitsuba's ``diffuse``.
     """
-    set_lobes(self, not is_zero(diffuse), not is_zero(specular), glossy_flags)
+
+    def __init__(self, lobes, two_sided: bool = False):
+        self.lobes, self.two_sided = list(lobes), two_sided
+
+    def enabled(self, ctx) -> list:
+        """The lobes the context asks for (configuration, not data)."""
+        return [lobe for lobe in self.lobes if lobe.enabled(ctx)]
+
+    def probabilities(self, ctx, si, lobes, active) -> list:
+        """Each lobe's probability of being sampled: its weight over their sum, detached (a
+        choice of strategy, not part of the model: as Mitsuba's sampling weights)."""
+        return mixture.probabilities([dr.detach(lobe.weight(ctx, si, active))
+                                      for lobe in lobes])
+
+    def eval_pdf(self, ctx, si, wo, active=True, probabilities=None):
+        """(f·|cosθo|, pdf of :meth:`sample`) at ``wo``: the enabled lobes' sum, and the
+        mixture of their densities."""
+        lobes = self.enabled(ctx)
+        if not lobes:
+            return mi.Spectrum(0.0), mi.Float(0.0)
+        wo = vector(wo)
+        if len(lobes) == 1:
+            value, pdf = lobes[0].eval_pdf(ctx, si, wo, active)
+            return depolarize(value), pdf
+        probs = probabilities or self.probabilities(ctx, si, lobes, active)
+        values, pdfs = zip(*(lobe.eval_pdf(ctx, si, wo, active) for lobe in lobes))
+        value = values[0]
+        for v in values[1:]:
+            value = value + v
+        return depolarize(value), mixture.pdf(probs, pdfs)
+
+    def sample(self, ctx, si, sample1, sample2, active=True):
+        """(BSDFSample3f, weight f·|cosθo|/pdf): ``sample1`` picks a lobe (and, rescaled, is
+        that lobe's own), ``sample2`` draws ωo from it; bs.pdf is the mixture density at ωo."""
+        bs, sample2 = dr.zeros(mi.BSDFSample3f), point2(sample2)
+        lobes = self.enabled(ctx)
+        if not lobes:
+            return bs, mi.Spectrum(0.0)
+        active = active & ((si.wi.z != 0) if self.two_sided else (si.wi.z > 0))
+        if none(active):
+            return bs, mi.Spectrum(0.0)
+        if len(lobes) == 1:  # alone: the lobe's own weight, in closed form where it has one
+            bs.wo, valid = lobes[0].sample(ctx, si, sample1, sample2, active)
+            bs.sampled_type, bs.sampled_component, bs.eta = lobes[0].record(si, bs.wo)
+            active = active & valid
+            if none(active):
+                return bs, mi.Spectrum(0.0)
+            value, bs.pdf = lobes[0].sample_weight(ctx, si, bs.wo, active)
+            return bs, dr.select(active & (bs.pdf > 0), depolarize(value), 0.0)
+        probs = self.probabilities(ctx, si, lobes, active)
+        k, u = mixture.choose(probs, sample1)
+        bs.wo, valid, bs.sampled_type, bs.sampled_component, bs.eta = _draw(
+            lobes, k, lambda lobe: (*lobe.sample(ctx, si, u, sample2, active),), si)
+        active = active & valid
+        value, bs.pdf = self.eval_pdf(ctx, si, bs.wo, active, probs)
+        return bs, weight(value, bs.pdf, active)
+
+    def diffuse_reflectance(self, si, active=True):
+        """The sum of the diffuse terms' albedos (0 without one)."""
+        total = mi.Spectrum(0.0)
+        for lobe in self.lobes:
+            rho = lobe.diffuse_reflectance(si, active)
+            if rho is not None:
+                total = total + rho
+        return total
 
 
-def set_lobes(self, has_diffuse: bool, has_glossy: bool, glossy_flags: int) -> None:
-    """:func:`set_two_lobes` for a model that decides itself which of its lobes exist."""
-    self._diffuse = self._glossy = None
-    components = []
-    if has_diffuse:
-        self._diffuse = len(components)
-        components.append(flag("DiffuseReflection", "FrontSide"))
-    if has_glossy:
-        self._glossy = len(components)
-        components.append(glossy_flags)
-    self.m_components = components  # a copy crosses to C++: assign, don't append
-    self.m_flags = 0
-    for c in components:
-        self.m_flags |= c
+def _draw(lobes, k, sample, si):
+    """(ωo, valid, type, component, η) of lobe ``k`` (an index: a Python int in scalar
+    variants, where only that lobe runs; a UInt32 else, where each lobe is traced and
+    selected)."""
+    if isinstance(k, int):
+        wo, valid = sample(lobes[k])
+        return (wo, valid, *lobes[k].record(si, wo))
+    out = None
+    for j, lobe in enumerate(lobes):
+        wo, valid = sample(lobe)
+        drawn = (wo, mi.Bool(valid), *lobe.record(si, wo))
+        out = drawn if out is None else tuple(dr.select(k == j, a, b)
+                                              for a, b in zip(drawn, out))
+    return out
 
 
-def two_lobes_enabled(self, ctx):
-    """Which lobes of :func:`set_two_lobes` the context asks for: (diffuse, glossy), bools."""
-    return (self._diffuse is not None and
-            ctx.is_enabled(mi.BSDFFlags.DiffuseReflection, self._diffuse),
-            self._glossy is not None and
-            ctx.is_enabled(mi.BSDFFlags.GlossyReflection, self._glossy))
+# The methods of a plugin class whose ``self.lobes`` is a Mixture (see the module docstring).
+
+def sample(self, ctx, si, sample1, sample2, active=True):
+    return self.lobes.sample(ctx, si, sample1, sample2, active)
 
 
-def two_lobes_diffuse_reflectance(self, si, active=True):
-    """``eval_diffuse_reflectance`` of :func:`set_two_lobes`'s models: ρd, or 0 without it."""
-    if self._diffuse is None:
-        return mi.Spectrum(0.0)
-    return self.m_diffuse_reflectance.eval(si, active)
+def eval(self, ctx, si, wo, active=True):
+    return self.lobes.eval_pdf(ctx, si, wo, active)[0]
 
 
-def glossy_or_diffuse(self, bs, sample1, sample2, p_glossy, lobes, glossy):
-    """
-    Fill ``bs`` for a model of :func:`set_two_lobes`: ωo from ``glossy()`` or from the
-    cosine-weighted hemisphere (``sample2``), the glossy one where ``sample1`` < ``p_glossy``
-    when both of ``lobes`` (diffuse, glossy: enabled) are; the lobe's type and component
-    index, η = 1.
-    """
-    has_diffuse, has_glossy = lobes
-    pick = (sample1 < p_glossy) if has_diffuse and has_glossy else has_glossy
-    bs.wo = choose(pick, glossy, lambda: mi.warp.square_to_cosine_hemisphere(sample2))
-    bs.sampled_type = dr.select(pick, mi.UInt32(flag("GlossyReflection")),
-                                mi.UInt32(flag("DiffuseReflection")))
-    bs.sampled_component = dr.select(pick, mi.UInt32(self._glossy or 0),
-                                     mi.UInt32(self._diffuse or 0))
-    bs.eta = 1.0
-    return bs
+def pdf(self, ctx, si, wo, active=True):
+    return self.lobes.eval_pdf(ctx, si, wo, active)[1]
 
 
-def two_lobes_sample(self, ctx, si, sample1, sample2, active=True):
-    """
-    ``sample`` of a model of :func:`set_two_lobes` whose class gives
-    ``_glossy_params(si, active)`` (what its glossy lobe needs at ``si``, computed once),
-    ``_sample_glossy(si, sample2, params)`` → ωo, ``_glossy_probability(si)`` and
-    ``_eval_pdf(ctx, si, wo, active, enabled, params)`` → (f·cosθo, mixture pdf of ``sample``):
-    ωo from the glossy lobe where ``sample1`` < the probability (both lobes enabled), else
-    from the cosine-weighted hemisphere; bs.pdf is the mixture density at ωo and the weight
-    f·cosθo / pdf, 0 below the horizon.
-    """
-    bs, sample2 = new_sample(), point2(sample2)
-    enabled = self._enabled(ctx)
-    if not (enabled[0] or enabled[1]):
-        return bs, mi.Spectrum(0.0)
-    active = active & (si.wi.z > 0)  # one-sided: the local frame's z is cosθ
-    if none(active):
-        return bs, mi.Spectrum(0.0)
-    params = self._glossy_params(si, active) if enabled[1] else None
-    glossy_or_diffuse(self, bs, sample1, sample2, self._glossy_probability(si), enabled,
-                      lambda: self._sample_glossy(si, sample2, params))
-    value, bs.pdf = self._eval_pdf(ctx, si, bs.wo, active, enabled, params)
-    return bs, weight(value, bs.pdf, active)
+def eval_pdf(self, ctx, si, wo, active=True):
+    return self.lobes.eval_pdf(ctx, si, wo, active)
 
 
-def two_lobes_eval_pdf(self, ctx, si, wo, active=True):
-    """``eval_pdf`` of a model of :func:`two_lobes_sample`: its ``_eval_pdf`` for the lobes
-    the context enables."""
-    enabled = self._enabled(ctx)
-    if not (enabled[0] or enabled[1]):
-        return mi.Spectrum(0.0), mi.Float(0.0)
-    return self._eval_pdf(ctx, si, vector(wo), active, enabled)
+def eval_diffuse_reflectance(self, si, active=True):
+    # The default, eval(wo = n)·π, would count the glossy lobes
+    # (https://github.com/mitsuba-renderer/mitsuba3/pull/1896).
+    return self.lobes.diffuse_reflectance(si, active)
+
+
+def components(lobes) -> tuple[list[int], int]:
+    """(m_components, m_flags) of lobes in component order (lobes sharing a component, such
+    as a compensation and the lobe it compensates, give it once)."""
+    flags = {}
+    for lobe in lobes:
+        for c, f in lobe.component_flags().items():
+            flags[c] = flags.get(c, 0) | f
+    listed = [flags[c] for c in sorted(flags)]
+    total = 0
+    for f in listed:
+        total |= f
+    return listed, total

@@ -19,7 +19,38 @@ PLUGIN = "orennayar"
 #: [0, π/2] (the model's coefficients stay finite beyond, but mean nothing there).
 SIGMA_MAX = math.pi / 2
 
-FLAGS = lobes.flag("DiffuseReflection", "FrontSide")
+
+
+class RoughDiffuse(lobes.Diffuse):
+    """
+    The lobe ρ/π·factor of Oren-Nayar's ``form`` and ``sigma`` (a Float or a texture), sampled by the cosine-weighted
+    hemisphere as the Lambertian lobe it generalises: computed as it computes, so that σ = 0
+    (factor exactly 1) is bit-identical to it.
+    """
+
+    def __init__(self, reflectance, sigma, form: str):
+        super().__init__(reflectance)
+        self.sigma, self.form = sigma, form
+
+    def factor(self, si, wo, rho, active):
+        """f/(ρ/π) at (ωi, ωo): exactly 1 where σ = 0."""
+        sigma = self.sigma.eval_1(si, active) if isinstance(self.sigma, mi.Texture) \
+            else self.sigma
+        # values set through mi.traverse are not validated: clamp them into the accepted range
+        sigma = dr.clip(sigma, 0.0, SIGMA_MAX)
+        factor = terms.factor(self.form, sigma, si.wi, wo, rho)
+        # the full form as written goes negative at grazing forward scattering: 0 there
+        return dr.maximum(factor, 0.0) if self.form == "full" else factor
+
+    def value(self, si, wo, active):
+        """(ρ/π·cosθo)·factor, in lambert's order of operations."""
+        rho = self.rho(si, active)
+        return rho * dr.inv_pi * wo.z * self.factor(si, wo, rho, active)
+
+    def sample_weight(self, ctx, si, wo, active):
+        """ρ·factor (ρ alone at σ = 0, as lambert)."""
+        rho = self.rho(si, active)
+        return rho * self.factor(si, wo, rho, active), mi.warp.square_to_cosine_hemisphere_pdf(wo)
 
 
 def _sigma(props):
@@ -99,40 +130,16 @@ class OrenNayar(mi.BSDF):
         self.m_sigma = sigma if self._textured_sigma else mi.Float(sigma)
         #: ``qualitative`` or ``full``
         self.m_form = properties.choice(props, PLUGIN, "form", "qualitative", terms.FORMS)
-        self.m_flags = FLAGS
-        self.m_components = [FLAGS]
+        self.parameters_changed()
+        self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
 
-    # ωo from the cosine-weighted hemisphere, pdf cosθo/π
-    sample = lobes.diffuse_sample
-    eval, pdf = lobes.diffuse_eval, lobes.diffuse_pdf
-    eval_pdf = lobes.diffuse_eval_pdf
+    def parameters_changed(self, keys=()):
+        """The lobe, from the parameters as they are now."""
+        self.lobes = lobes.Mixture([RoughDiffuse(self.m_reflectance, self.m_sigma, self.m_form)])
 
-    def _sample_weight(self, si, wo, active):
-        """f·cosθo / pdf = ρ·factor (ρ alone at σ = 0, as lambert)."""
-        rho = self.m_reflectance.eval(si, active)
-        return rho * self._factor(si, si.wi, wo, rho, active)
-
-    def _eval_pdf(self, si, wo, active):
-        """(f·cosθo, pdf) at ``wo``, for eval, pdf and eval_pdf."""
-        wo = lobes.vector(wo)
-        active = active & (si.wi.z > 0) & (wo.z > 0)  # one-sided, like `diffuse`
-        # f·cosθo = (ρ/π·cosθo)·factor, in lambert's order of operations
-        rho = self.m_reflectance.eval(si, active)
-        value = rho * dr.inv_pi * wo.z * self._factor(si, si.wi, wo, rho, active)
-        pdf = mi.warp.square_to_cosine_hemisphere_pdf(wo)
-        return lobes.finish(value, pdf, active)
-
-    def _factor(self, si, wi, wo, rho, active):
-        """f/(ρ/π) at (ωi, ωo): exactly 1 where σ = 0."""
-        sigma = self.m_sigma.eval_1(si, active) if self._textured_sigma else self.m_sigma
-        # values set through mi.traverse are not validated: clamp them into the accepted range
-        sigma = dr.clip(sigma, 0.0, SIGMA_MAX)
-        factor = terms.factor(self.m_form, sigma, wi, wo, rho)
-        # the full form as written goes negative at grazing forward scattering: 0 there
-        return dr.maximum(factor, 0.0) if self.m_form == "full" else factor
-
-    def eval_diffuse_reflectance(self, si, active=True):
-        return self.m_reflectance.eval(si, active)
+    # one lobe: ωo from the cosine-weighted hemisphere, pdf cosθo/π
+    sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
+    eval_diffuse_reflectance = lobes.eval_diffuse_reflectance
 
     def traverse(self, cb):
         cb.put("reflectance", self.m_reflectance, mi.ParamFlags.Differentiable)

@@ -11,7 +11,6 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..scattering import mixture
 from ..scattering import phong as terms
 from . import lobes, properties
 
@@ -46,6 +45,62 @@ def constants(form, lobe, n):
     n = dr.clip(n, 0.0, EXPONENT_MAX)
     return (n, 1.0 / (n + 1.0), terms.specular_normalization(form, lobe, n),
             terms.pdf_normalization(n))
+
+
+class Glossy(lobes.Lobe):
+    """
+    The specular lobe ks·c·cosⁿα·cosθo (over N·L for the ``original`` form) of a ``form`` and
+    ``lobe`` (mirror or halfway), sampled by cosⁿ about R (or H about N, then reflected).
+    ``exponent``: a Float or a texture.
+    """
+
+    kind = "GlossyReflection"
+
+    def __init__(self, specular, form: str, lobe: str, exponent, component: int, flags: int):
+        self.specular, self.form, self.lobe = specular, form, lobe
+        self.exponent, self.component, self.flags = exponent, component, flags
+        mirror = lobe == "mirror"
+        self.lobe_value = terms.mirror_lobe if mirror else terms.halfway_lobe
+        self.lobe_sample = terms.sample_mirror if mirror else terms.sample_halfway
+        #: the constants of a uniform exponent, once per parameter change (opaque: a changed
+        #: exponent updates the kernel's inputs instead of recompiling it)
+        self.constants = None
+        if not isinstance(exponent, mi.Texture):
+            self.constants = constants(form, lobe, exponent)
+            dr.make_opaque(*self.constants)
+
+    def _constants(self, si, active):
+        if self.constants is None:
+            return constants(self.form, self.lobe, self.exponent.eval_1(si, active))
+        return self.constants
+
+    def eval_pdf(self, ctx, si, wo, active):
+        cos_theta_i, cos_theta_o = si.wi.z, wo.z
+        active = active & (cos_theta_i > 0) & (cos_theta_o > 0)  # one-sided, like `diffuse`
+        # ks·c·cosⁿα·cosθo (over N·L for the original form), and the lobe's own density
+        n, _, norm, pdf_norm = self._constants(si, active)
+        lobe, pdf = self.lobe_value(si.wi, wo, n, pdf_norm)
+        value = properties.clip_at(self.specular, si, active) * (
+            norm * lobe * self._projection(ctx, cos_theta_i, cos_theta_o))
+        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
+
+    def _projection(self, ctx, cos_theta_i, cos_theta_o):
+        """cosθo, divided by N·L in the ``original`` form (L: the light's side)."""
+        if self.form != "original":
+            return cos_theta_o
+        if ctx.mode == mi.TransportMode.Importance:  # L = ωi, floored where f diverges
+            return cos_theta_o / dr.maximum(cos_theta_i, COS_LIGHT_MIN)
+        return 1.0  # radiance: L = ωo, so cosθo / (N·L) = 1
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        """cosⁿ about R, or H about N and ωi reflected about it."""
+        return self.lobe_sample(si.wi, sample2, self._constants(si, active)[1]), True
+
+    def weight(self, ctx, si, active):
+        """mean(ks)·E(0): the lobe's albedo at normal incidence (as Mitsuba 0.6's phong)."""
+        n = self._constants(si, active)[0]
+        return dr.mean(properties.clip_at(self.specular, si, active)) * \
+            terms.specular_albedo(self.form, self.lobe, n)
 
 
 class Phong(mi.BSDF):
@@ -173,12 +228,10 @@ class Phong(mi.BSDF):
             self._warn_unnormalised(props, exponent)
 
         # Lobes in component order; one whose reflectance is the constant 0 is left out.
-        lobes.set_two_lobes(self, self.m_diffuse_reflectance, self.m_specular_reflectance,
-                            GLOSSY_FLAGS | (NONSYMMETRIC if self.m_form == "original" else 0))
-        mirror = self.m_lobe == "mirror"
-        self._lobe_value = terms.mirror_lobe if mirror else terms.halfway_lobe
-        self._lobe_sample = terms.sample_mirror if mirror else terms.sample_halfway
-        self.parameters_changed([])
+        self._has = (not properties.is_zero(self.m_diffuse_reflectance),
+                     not properties.is_zero(self.m_specular_reflectance))
+        self.parameters_changed()
+        self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
 
     def _warn_unnormalised(self, props, exponent):
         """Warn (values kept) where the ``lecture`` or ``original`` form, not normalised,
@@ -197,79 +250,27 @@ class Phong(mi.BSDF):
                                     f"at normal incidence (ρd + ks·E(0) at n = {float(n):g}: "
                                     f"the form is not normalised); values kept")
 
-    eval, pdf = lobes.eval_half, lobes.pdf_half
-    _enabled = lobes.two_lobes_enabled
-    eval_diffuse_reflectance = lobes.two_lobes_diffuse_reflectance
-
-    sample, eval_pdf = lobes.two_lobes_sample, lobes.two_lobes_eval_pdf
-
-    def _sample_glossy(self, si, sample2, consts):
-        """ωo from the glossy lobe: cosⁿ about R, or H about N."""
-        return self._lobe_sample(si.wi, sample2, consts[1])
-
-    def _glossy_probability(self, si):
-        """The probability of sampling the glossy lobe: constant per BSDF."""
-        return self._p_glossy
-
-    def _eval_pdf(self, ctx, si, wo, active, enabled, consts=None):
-        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the ``enabled`` lobes
-        (diffuse, glossy)."""
-        has_diffuse, has_glossy = enabled
-        cos_theta_i, cos_theta_o = si.wi.z, wo.z
-        active = active & (cos_theta_i > 0) & (cos_theta_o > 0)  # one-sided, like `diffuse`
-        if has_diffuse:
-            # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
-            pdf = dr.inv_pi * cos_theta_o
-            value = self.m_diffuse_reflectance.eval(si, active) * pdf
-        if has_glossy:
-            # ks·c·cosⁿα·cosθo (over N·L for the original form), and the lobe's own density
-            n, _, norm, pdf_norm = consts or self._lobe_constants(si, active)
-            lobe, pdf_s = self._lobe_value(si.wi, wo, n, pdf_norm)
-            value_s = self.m_specular_reflectance.eval(si, active) * (
-                norm * lobe * self._projection(ctx, cos_theta_i, cos_theta_o))
-            if has_diffuse:  # both lobes: their sum, and the mixture of both strategies
-                value, pdf = value + value_s, mixture.pdf(self._p_glossy, pdf_s, pdf)
-            else:
-                value, pdf = value_s, pdf_s
-        return lobes.finish(value, pdf, active)
-
-    def _projection(self, ctx, cos_theta_i, cos_theta_o):
-        """cosθo, divided by N·L in the ``original`` form (L: the light's side)."""
-        if self.m_form != "original":
-            return cos_theta_o
-        if ctx.mode == mi.TransportMode.Importance:  # L = ωi, floored where f diverges
-            return cos_theta_o / dr.maximum(cos_theta_i, COS_LIGHT_MIN)
-        return 1.0  # radiance: L = ωo, so cosθo / (N·L) = 1
-
-    def _lobe_constants(self, si, active):
-        if self._textured_exponent:
-            return constants(self.m_form, self.m_lobe, self.m_exponent.eval_1(si, active))
-        return self._constants
-
-    _glossy_params = _lobe_constants
+    # the diffuse lobe (cosine-weighted hemisphere) and the glossy one, mixed by their albedos
+    sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
+    eval_diffuse_reflectance = lobes.eval_diffuse_reflectance
 
     def parameters_changed(self, keys=()):
-        """Precompute the lobe constants and the lobe choice probability."""
-        n = self.m_exponent
-        if not self._textured_exponent:
-            self._constants = constants(self.m_form, self.m_lobe, n)
-        n_mean = dr.clip(dr.detach(n.mean() if self._textured_exponent else n), 0.0,
-                         EXPONENT_MAX)
-        # Lobe choice by albedo weights, from the textures' means (as Mitsuba's roughplastic and
-        # Mitsuba 0.6's phong): constant per BSDF, so nothing to evaluate per call.
-        w_d = dr.detach(self.m_diffuse_reflectance.mean())
-        w_s = dr.detach(self.m_specular_reflectance.mean()) * terms.specular_albedo(
-            self.m_form, self.m_lobe, n_mean)
-        self._p_glossy = mi.Float(mixture.probability(w_s, w_d))
-        # opaque: a changed parameter updates the kernel's inputs instead of recompiling it
-        dr.make_opaque(self._p_glossy, *([] if self._textured_exponent else self._constants))
+        """The lobes, from the parameters as they are now."""
+        # components: the diffuse lobe first; sampling: the glossy one first
+        has_diffuse, has_glossy = self._has
+        terms_ = [lobes.Diffuse(self.m_diffuse_reflectance)] if has_diffuse else []
+        if has_glossy:
+            flags = GLOSSY_FLAGS | (NONSYMMETRIC if self.m_form == "original" else 0)
+            terms_.insert(0, Glossy(self.m_specular_reflectance, self.m_form, self.m_lobe,
+                                    self.m_exponent, int(has_diffuse), flags))
+        self.lobes = lobes.Mixture(terms_)
 
     def traverse(self, cb):
         # Only the parameters of lobes that exist: the lobe structure is fixed at load time.
-        if self._diffuse is not None:
+        if self._has[0]:
             cb.put("diffuse_reflectance", self.m_diffuse_reflectance,
                    mi.ParamFlags.Differentiable)
-        if self._glossy is not None:
+        if self._has[1]:
             cb.put("specular_reflectance", self.m_specular_reflectance,
                    mi.ParamFlags.Differentiable)
             if self._textured_exponent or dr.is_jit_v(mi.Float):  # a float cannot be updated

@@ -5,8 +5,9 @@ textures, roughness.
 Every reader raises :class:`mi_brdfs.ParameterError` with one line naming the plugin, the
 parameter, the value and what is allowed. Mitsuba wraps an exception raised in a plugin
 constructor into its own ``RuntimeError`` (with the scene location); the CLI unwraps it again.
-A texture whose range cannot be known when the scene loads is clamped into range when it is
-evaluated (:func:`clamped`), so that no value outside a parameter's range reaches a model.
+A texture whose range cannot be known when the scene loads is clipped into range where the
+models evaluate it (:func:`clip_at`), so that no value outside a parameter's range reaches a
+model.
 """
 
 from __future__ import annotations
@@ -90,55 +91,21 @@ def texture_range(tex) -> tuple[float, float] | None:
     return None
 
 
-_clamped_classes: dict = {}
+def clip(x, lo: float, hi: float):
+    """``x`` clipped into [``lo``, ``hi``] by selection, so that a value inside passes its
+    derivative unchanged, at the ends too (``dr.clip``'s maximum gives 0 at a tie)."""
+    return dr.select(x < lo, lo, dr.select(x > hi, hi, x))
 
 
-def clamped(tex, lo: float, hi: float):
+def clip_at(tex, si, active, lo: float = 0.0, hi: float = 1.0):
     """
-    ``tex`` with every value clamped into [``lo``, ``hi``] when it is evaluated: for textures
-    whose range cannot be known at load time (see :func:`texture_range`), so that no value
-    outside a parameter's range (a negative or energy-creating reflectance) reaches the model.
-    Its parameters are the nested texture's, under the same names (``mi.traverse``).
+    ``tex`` evaluated at ``si``, clipped into [``lo``, ``hi``] (a reflectance's [0, 1] by
+    default). Every bounded parameter is read this way: a texture whose range can be known
+    at load is checked then (:func:`texture`), but one whose range cannot (``mesh_attribute``,
+    a texture written in Python) and a value set later through ``mi.traverse`` reach the model
+    only here, so that no negative or energy-creating value does.
     """
-    variant = mi.variant()
-    if variant not in _clamped_classes:
-        _clamped_classes[variant] = _clamped_class()
-    return _clamped_classes[variant](tex, lo, hi)
-
-
-def _clamped_class():
-    """The clamping texture class of the current variant's ``mi.Texture``."""
-
-    class Clamped(mi.Texture):
-        def __init__(self, nested, lo, hi):
-            super().__init__(mi.Properties())
-            self.nested, self.lo, self.hi = nested, lo, hi
-
-        def eval(self, si, active=True):
-            return dr.clip(self.nested.eval(si, active), self.lo, self.hi)
-
-        def eval_1(self, si, active=True):
-            return dr.clip(self.nested.eval_1(si, active), self.lo, self.hi)
-
-        def eval_3(self, si, active=True):
-            return dr.clip(self.nested.eval_3(si, active), self.lo, self.hi)
-
-        def mean(self):
-            return dr.clip(self.nested.mean(), self.lo, self.hi)
-
-        def is_spatially_varying(self):
-            return True  # as far as anyone can tell: never evaluated without a shape
-
-        def traverse(self, cb):
-            self.nested.traverse(cb)
-
-        def parameters_changed(self, keys=()):
-            self.nested.parameters_changed(keys)
-
-        def to_string(self):
-            return f"Clamped[{self.lo:g}, {self.hi:g}] {indent(self.nested)}"
-
-    return Clamped
+    return clip(tex.eval(si, active), lo, hi)
 
 
 def _range_text(lo: float, hi: float, lo_open: bool) -> str:
@@ -163,8 +130,8 @@ def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: 
     such); others with ``get_unbounded_texture`` (η, k, α), which accepts RGB values above 1.
 
     A texture whose range can be known at load (:func:`texture_range`) is checked then; one
-    whose range cannot (``mesh_attribute``, a texture written in Python) is returned wrapped
-    by :func:`clamped`, so that its values are clamped into range at each evaluation.
+    whose range cannot (``mesh_attribute``, a texture written in Python) is returned as it is:
+    the models clip its values into range where they evaluate it (:func:`clip_at`).
 
     Returns → mi.Texture. Raises ParameterError for values out of range or not finite, and for
     properties that are neither numbers nor colours nor textures.
@@ -188,8 +155,8 @@ def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: 
         elif kind in (T.Spectrum, T.Object):
             tex = getter(name, default)
             rng = texture_range(tex)
-            if rng is None:  # unknowable at load: clamped into range at each evaluation
-                return clamped(tex, lo, hi)
+            if rng is None:  # unknowable at load: clipped where it is evaluated (clip_at)
+                return tex
             if not (_in_range(rng[0], lo, hi, lo_open) and _in_range(rng[1], lo, hi, lo_open)):
                 shown = Description(f"a texture with values in [{rng[0]:g}, {rng[1]:g}]")
                 raise ParameterError(plugin, name, shown, allowed)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from ..scattering import mixture, vector
+from ..scattering import vector
 from ..scattering import ward as terms
 from . import lobes, properties
 
@@ -19,6 +19,44 @@ GLOSSY_FLAGS = lobes.flag("GlossyReflection", "FrontSide")
 ANISOTROPIC = lobes.flag("Anisotropic")
 DIFFERENTIABLE = mi.ParamFlags.Differentiable
 DISCONTINUOUS = mi.ParamFlags.Differentiable | mi.ParamFlags.Discontinuous
+
+
+class Glossy(lobes.Lobe):
+    """
+    Ward's lobe ρs·S·cosθo of a ``form``, width ``alpha_u``, ``alpha_v`` (textures, the same
+    one when isotropic), sampled by the half vector of Ward's 1992 recipe with Walter's
+    density (:mod:`mi_brdfs.scattering.ward`).
+    """
+
+    kind = "GlossyReflection"
+
+    def __init__(self, specular, form: str, alpha_u, alpha_v, component: int, flags: int):
+        self.specular, self.form, self.alpha_u, self.alpha_v = specular, form, alpha_u, alpha_v
+        self.component, self.flags = component, flags
+
+    def distribution(self, si, active):
+        """The lobe's Beckmann distribution at ``si``, α clamped to 10⁻⁴."""
+        return terms.distribution(*properties.roughness_at(self.alpha_u, self.alpha_v, si,
+                                                           active))
+
+    def eval_pdf(self, ctx, si, wo, active):
+        wi = si.wi
+        active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
+        # ρs·S·cosθo, and the density of the reflected half vector
+        distr = self.distribution(si, active)
+        h = vector.half_vector(wi, wo)
+        d = distr.ndf(h)
+        value = properties.clip_at(self.specular, si, active) * (
+            terms.specular(self.form, distr, wi, wo, h, d) * wo.z)
+        return dr.select(active, value, 0.0), dr.select(active, terms.pdf(wo, h, d), 0.0)
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        """ωi reflected about a half vector of the Gaussian lobe (Ward's 1992 recipe)."""
+        return vector.reflect(si.wi, terms.sample(self.distribution(si, active), sample2)), True
+
+    def weight(self, ctx, si, active):
+        """mean(ρs), as Mitsuba 0.6's ward."""
+        return dr.mean(properties.clip_at(self.specular, si, active))
 
 
 class Ward(mi.BSDF):
@@ -113,68 +151,31 @@ class Ward(mi.BSDF):
                             ("specular_reflectance", self.m_specular_reflectance),
                             "the lobes' albedos then add up to more than 1 at normal incidence")
         # Lobes in component order; one whose reflectance is the constant 0 is left out.
-        lobes.set_two_lobes(self, self.m_diffuse_reflectance, self.m_specular_reflectance,
-                            GLOSSY_FLAGS | (ANISOTROPIC if self.m_anisotropic else 0))
+        self._has = (not properties.is_zero(self.m_diffuse_reflectance),
+                     not properties.is_zero(self.m_specular_reflectance))
         self.parameters_changed()
+        self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
 
-    eval, pdf = lobes.eval_half, lobes.pdf_half
-    sample, eval_pdf = lobes.two_lobes_sample, lobes.two_lobes_eval_pdf
-    _enabled = lobes.two_lobes_enabled
-    eval_diffuse_reflectance = lobes.two_lobes_diffuse_reflectance
-
-    def _eval_pdf(self, ctx, si, wo, active, enabled, distr=None):
-        """(f·cosθo, mixture pdf of :meth:`sample`) at ``wo`` for the ``enabled`` lobes
-        (diffuse, glossy)."""
-        has_diffuse, has_glossy = enabled
-        wi = si.wi
-        active = active & (wi.z > 0) & (wo.z > 0)  # one-sided
-        if has_diffuse:
-            # ρd/π·cosθo, sampled by the cosine-weighted hemisphere
-            pdf = dr.inv_pi * wo.z
-            value = self.m_diffuse_reflectance.eval(si, active) * pdf
-        if has_glossy:
-            # ρs·S·cosθo, and the density of the reflected half vector
-            distr = distr or self._distribution(si, active)
-            h = vector.half_vector(wi, wo)
-            d = distr.ndf(h)
-            value_s = self.m_specular_reflectance.eval(si, active) * (
-                terms.specular(self.m_form, distr, wi, wo, h, d) * wo.z)
-            pdf_s = terms.pdf(wo, h, d)
-            if has_diffuse:  # both lobes: their sum, and the mixture of both strategies
-                value, pdf = value + value_s, mixture.pdf(self._p_glossy, pdf_s, pdf)
-            else:
-                value, pdf = value_s, pdf_s
-        return lobes.finish(value, pdf, active)
-
-    def _distribution(self, si, active):
-        """The lobe's Beckmann distribution at ``si``, α clamped to 10⁻⁴."""
-        return terms.distribution(*properties.roughness_at(self.m_alpha_u, self.m_alpha_v, si,
-                                                           active))
-
-    _glossy_params = _distribution
-
-    def _sample_glossy(self, si, sample2, distr):
-        """ωi reflected about a half vector of the Gaussian lobe (Ward's 1992 recipe)."""
-        return vector.reflect(si.wi, terms.sample(distr, sample2))
-
-    def _glossy_probability(self, si):
-        """The probability of sampling the glossy lobe: constant per BSDF."""
-        return self._p_glossy
+    # the diffuse lobe (cosine-weighted hemisphere) and the glossy one, mixed by their albedos
+    sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
+    eval_diffuse_reflectance = lobes.eval_diffuse_reflectance
 
     def parameters_changed(self, keys=()):
-        """The lobe choice probability."""
-        # Lobe choice by the reflectances' means (as Mitsuba 0.6's ward): constant per BSDF.
-        self._p_glossy = mi.Float(mixture.probability(
-            dr.detach(self.m_specular_reflectance.mean()),
-            dr.detach(self.m_diffuse_reflectance.mean())))
-        # opaque: a changed parameter updates the kernel's inputs instead of recompiling it
-        dr.make_opaque(self._p_glossy)
+        """The lobes, from the parameters as they are now."""
+        # components: the diffuse lobe first; sampling: the glossy one first
+        has_diffuse, has_glossy = self._has
+        terms_ = [lobes.Diffuse(self.m_diffuse_reflectance)] if has_diffuse else []
+        if has_glossy:
+            flags = GLOSSY_FLAGS | (ANISOTROPIC if self.m_anisotropic else 0)
+            terms_.insert(0, Glossy(self.m_specular_reflectance, self.m_form, self.m_alpha_u,
+                                    self.m_alpha_v, int(has_diffuse), flags))
+        self.lobes = lobes.Mixture(terms_)
 
     def traverse(self, cb):
         # Only the parameters of lobes that exist: the lobe structure is fixed at load time.
-        if self._diffuse is not None:
+        if self._has[0]:
             cb.put("diffuse_reflectance", self.m_diffuse_reflectance, DIFFERENTIABLE)
-        if self._glossy is not None:
+        if self._has[1]:
             cb.put("specular_reflectance", self.m_specular_reflectance, DIFFERENTIABLE)
             if self.m_anisotropic:
                 cb.put("alpha_u", self.m_alpha_u, DISCONTINUOUS)

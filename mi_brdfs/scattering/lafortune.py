@@ -31,7 +31,7 @@ exactly Phong's R. The two normalisations of the plugin put a factor K in front:
 **Sampling** draws cosⁿβ about d (density (n+1)/(2π)·cosⁿβ, as
 :func:`mi_brdfs.scattering.phong.sample_cos_power`), which is proportional to the lobe for the
 given u; the lobes and a cosine-weighted diffuse term are mixed in proportion to weights
-(:func:`choose`, :func:`mixture_pdf`: Veach 1997, §9.2.4, with more than two strategies).
+(:mod:`mi_brdfs.scattering.mixture`: Veach 1997, §9.2.4, with more than two strategies).
 """
 
 from __future__ import annotations
@@ -136,36 +136,3 @@ def sample(d, u, inv_n1):
     """``wo`` drawn with density (n+1)/(2π)·cosⁿβ about the principal direction ``d``, from
     ``u`` ∈ [0, 1)² and 1/(n+1)."""
     return mi.Frame3f(d).to_world(sample_cos_power(u, inv_n1))
-
-
-# -------------------------------------------------------------------------------------------------
-# The mixture of several strategies (Veach 1997, §9.2.4)
-# -------------------------------------------------------------------------------------------------
-
-
-def probabilities(weights):
-    """wₖ/Σw for each strategy; equal where every weight is 0."""
-    total = weights[0]
-    for w in weights[1:]:
-        total = total + w
-    ok = total > 0
-    inv = dr.select(ok, 1.0 / dr.select(ok, total, 1.0), 0.0)
-    return [dr.select(ok, w * inv, 1.0 / len(weights)) for w in weights]
-
-
-def choose(probs, u):
-    """The index k of the strategy that ``u`` ∈ [0, 1) picks: Σ_{j<k} pⱼ ≤ u < Σ_{j≤k} pⱼ
-    (a strategy of probability 0 is never picked)."""
-    index, acc = mi.UInt32(0), 0.0
-    for p in probs[:-1]:
-        acc = acc + p
-        index = index + dr.select(u >= acc, mi.UInt32(1), mi.UInt32(0))
-    return index
-
-
-def mixture_pdf(probs, pdfs):
-    """Σₖ pₖ·pdfₖ: the density of the one-sample mixture."""
-    total = probs[0] * pdfs[0]
-    for p, density in zip(probs[1:], pdfs[1:]):
-        total = total + p * density
-    return total

@@ -212,6 +212,69 @@ class Distribution:
         return mi.Vector3f(dr.select(flip, -m.x, m.x), dr.select(flip, -m.y, m.y), m.z)
 
 
+class Smith:
+    """
+    Smith's separable masking-shadowing of a :class:`Distribution`, G = G1(ωi)·G1(ωo) (Walter
+    et al. 2007, eq. 23), with G1 as Mitsuba 3 computes it (:meth:`Distribution.
+    smith_g1_mitsuba`), its visible normals (Heitz & d'Eon 2014) and their sample weight.
+    """
+
+    name = "smith"
+
+    def __init__(self, distr: Distribution):
+        self.distr = distr
+
+    def G1(self, v, m, vm=None):
+        """G1(v, m); ``vm``: v·m where the caller has it."""
+        return self.distr.smith_g1_mitsuba(v, m, vm)
+
+    def G(self, wi, wo, m, cos_im, cos_om):
+        """G(ωi, ωo, m), given ωi·m and ωo·m."""
+        return self.G1(wi, m, cos_im) * self.G1(wo, m, cos_om)
+
+    def sample_visible(self, wi, u, u_facet):
+        """A visible normal of ``wi`` (``u_facet`` unused: Smith's sampler needs no choice)."""
+        return self.distr.sample_visible(wi, u)
+
+    def visible_weight(self, wi, wo, m, cos_im, cos_om):
+        """G/G1(ωi) of a reflection sampled by :meth:`sample_visible`: G1(ωo), in closed form
+        (D and 4 cosθi cancel against its density)."""
+        return self.G1(wo, m, cos_om)
+
+
+class VCavity:
+    """
+    The V-cavity masking-shadowing of Cook & Torrance 1982 (:func:`vcavity_g`), its visible
+    normals (:meth:`Distribution.sample_vcavity_visible`, Heitz & d'Eon 2014, §5) and their
+    sample weight; defined for directions above the surface only.
+    """
+
+    name = "vcavity"
+
+    def __init__(self, distr: Distribution):
+        self.distr = distr
+
+    def G1(self, v, m, vm=None):
+        """G1(v, m) (:func:`vcavity_g1`)."""
+        return vcavity_g1(v, m)
+
+    def G(self, wi, wo, m, cos_im, cos_om):
+        """G(ωi, ωo, m) (:func:`vcavity_g`, symmetric in ωi, ωo to the last bit)."""
+        return vcavity_g(wi, wo, m)
+
+    def sample_visible(self, wi, u, u_facet):
+        """A visible normal of ``wi``: one of the two facets of a V-groove, by ``u_facet``."""
+        return self.distr.sample_vcavity_visible(wi, u, u_facet)
+
+    def visible_weight(self, wi, wo, m, cos_im, cos_om):
+        """G/G1(ωi) of a reflection sampled by :meth:`sample_visible` (≤ 1)."""
+        return self.G(wi, wo, m, cos_im, cos_om) / dr.maximum(self.G1(wi, m, cos_im), _TINY)
+
+
+#: The masking-shadowing models by name.
+MASKING = {"smith": Smith, "vcavity": VCavity}
+
+
 def _facing(g1, v, vm):
     """χ⁺: a microfacet is seen only from its front (``vm`` = v·m), and only from the side of
     the surface."""

@@ -25,11 +25,11 @@ F_avg = 2∫F(μ)μ dμ, which gives the colour of the compensation
 ``cooktorrance`` plugin's own single-scattering lobe (:mod:`mi_brdfs.albedo_tables`) and shipped
 in ``mi_brdfs/data/microfacet_albedo.npz``. The nodes are uniform in x = sqrt(μ) and in
 y = sqrt(α / α_max): the albedo changes fastest at grazing incidence and at small roughness.
-:meth:`Table.albedo` interpolates bilinearly in (x, y) in every variant (a NumPy lookup in
+:meth:`AlbedoTable.albedo` interpolates bilinearly in (x, y) in every variant (a NumPy lookup in
 scalar variants; in JIT ones a gather from a ``mi.Float`` that stores each node beside the next,
 so that one packet gather reads both ends of a cell instead of two gathers; the
 ``multiscatter`` bench pairs of ``make bench`` price the compensation),
-and :meth:`Table.average_albedo` linearly in y: E_avg of a node is the exact integral of the
+and :meth:`AlbedoTable.average` linearly in y: E_avg of a node is the exact integral of the
 interpolant in μ, so the two are consistent between the nodes too and the compensated albedo
 is 1 up to the interpolation error of E alone. Beyond α_max the tables hold their last value
 (the compensation then falls short: the lobe loses energy, it never creates it).
@@ -76,9 +76,20 @@ def load_tables(path: str = str(TABLE_PATH)) -> dict:
         return out
 
 
-def dielectric_tables(kind: str, eta: float) -> tuple["Table", "Table"]:
-    """The :class:`Table` pair of :func:`dielectric_arrays`, in the current variant."""
-    return tuple(Table(kind, "smith", E, E_avg) for E, E_avg in dielectric_arrays(kind, eta))
+def conductor_table(kind: str, shadowing: str, alpha=None) -> "AlbedoTable":
+    """The shipped :class:`AlbedoTable` of a reflecting lobe's distribution and masking, at
+    the uniform roughness ``alpha`` (None: any roughness)."""
+    tables = load_tables()
+    key = table_key(kind, shadowing)
+    return AlbedoTable(tables["E"][key], tables["E_avg"][key], tables["alpha_max"], alpha)
+
+
+def dielectric_tables(kind: str, eta: float, alpha=None) -> tuple["AlbedoTable", ...]:
+    """The :class:`AlbedoTable` pair of :func:`dielectric_arrays` (lit from above, from
+    below), at the uniform roughness ``alpha`` (None: any roughness)."""
+    alpha_max = load_tables()["alpha_max"]
+    return tuple(AlbedoTable(E, E_avg, alpha_max, alpha)
+                 for E, E_avg in dielectric_arrays(kind, eta))
 
 
 def dielectric_arrays(kind: str, eta: float) -> tuple[tuple, tuple]:
@@ -151,23 +162,36 @@ def _cell(t, n):
     return i, s - mi.Float(i)
 
 
-class Table:
+class AlbedoTable:
     """
-    E(μ, α) and E_avg(α) of one distribution and masking, in the current variant (the arrays
-    are built when the lobe is, so each variant gets its own types). ``E`` and ``E_avg``
-    override the shipped tables (the tests perturb them).
+    E(μ, α) and E_avg(α) of one single-scattering lobe (``E``: n_α × n_μ nodes, ``E_avg``: n_α,
+    float64 NumPy arrays; ``alpha_max``: the last α node), looked up in the current variant
+    (the arrays are built with the lobe, so each variant gets its own types). With ``alpha``,
+    a uniform roughness (a float or a width-1 Float), the table is interpolated in α once,
+    here, so that a lookup reads one pair of values, not two; gradients through ``alpha``
+    still flow into that row.
     """
 
-    def __init__(self, kind: str, shadowing: str, E=None, E_avg=None):
-        tables = load_tables()
-        key = table_key(kind, shadowing)
-        E = tables["E"][key] if E is None else np.asarray(E, np.float64)
-        E_avg = tables["E_avg"][key] if E_avg is None else np.asarray(E_avg, np.float64)
+    def __init__(self, E, E_avg, alpha_max: float, alpha=None):
+        E, E_avg = np.asarray(E, np.float64), np.asarray(E_avg, np.float64)
         self.n_alpha, self.n_mu = E.shape
-        self.alpha_max = tables["alpha_max"]
+        self.alpha_max = alpha_max
         jit = dr.is_jit_v(mi.Float)
         self._E = mi.Float(_node_pairs(E).astype(np.float32)) if jit else _node_pairs(E)
         self._E_avg = mi.Float(E_avg.astype(np.float32)) if jit else E_avg
+        #: E(μ) on the μ nodes (pairs, as _node_pairs) and E_avg at ``alpha``, or None
+        self.row = self.row_average = None
+        if alpha is not None:
+            self.row, self.row_average = self._row(alpha), self._average(alpha)
+
+    def __call__(self, mu, alpha=None):
+        """(E(μ), E_avg), linear in sqrt μ, at the table's uniform roughness or else at
+        ``alpha`` (a value, or a callable that gives it: only called when α varies)."""
+        if self.row is not None:
+            i, t = _cell(dr.sqrt(dr.maximum(mu, 0.0)), self.n_mu)
+            return dr.lerp(*_pair(self.row, i), t), self.row_average
+        alpha = alpha() if callable(alpha) else alpha
+        return self.albedo(mu, alpha), self._average(alpha)
 
     def albedo(self, mu, alpha):
         """E(μ, α), bilinear in (sqrt μ, sqrt(α/α_max))."""
@@ -178,100 +202,45 @@ class Table:
         e1 = dr.lerp(*_pair(self._E, (j + 1) * pairs + i), tx)
         return dr.lerp(e0, e1, ty)
 
-    def at(self, alpha) -> "Row":
-        """The table at one roughness (a uniform α, a width-1 Float or a float): E(μ) on the
-        μ nodes, interpolated in α once, so that a lookup reads 1 pair of values, not 2."""
-        j, ty = _cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
-        size = 2 * (self.n_mu - 1)  # a row of pairs
-        if dr.is_jit_v(mi.Float):
-            k = dr.arange(mi.UInt32, size)
-            row = dr.lerp(dr.gather(mi.Float, self._E, j * size + k),
-                          dr.gather(mi.Float, self._E, (j + 1) * size + k), ty)
-        else:
-            start = int(j) * size
-            row = (1.0 - ty) * self._E[start:start + size] + \
-                ty * self._E[start + size:start + 2 * size]
-        return Row(row, self.n_mu, self.average_albedo(alpha))
+    def average(self, alpha=None):
+        """E_avg at the table's uniform roughness, or else at ``alpha`` (as :meth:`__call__`)."""
+        if self.row is not None:
+            return self.row_average
+        return self._average(alpha() if callable(alpha) else alpha)
 
-    def average_albedo(self, alpha):
+    def _average(self, alpha):
         """E_avg(α), linear in sqrt(α/α_max)."""
         j, ty = _cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
         return dr.lerp(_gather(self._E_avg, j), _gather(self._E_avg, j + 1), ty)
 
-
-class Albedos:
-    """
-    E(μ) and E_avg of one :class:`Table` at a surface's roughness: the table's :class:`Row` of
-    a uniform α (interpolated in α once), else the table itself, at the equivalent isotropic
-    roughness of each point. ``alpha_u`` and ``alpha_v`` are the surface's roughness textures
-    (the same one when isotropic).
-    """
-
-    def __init__(self, table: Table, alpha_u, alpha_v):
-        from .microfacet import ALPHA_MIN
-
-        self.table, self.row = table, None
-        if not (alpha_u.is_spatially_varying() or alpha_v.is_spatially_varying()):
-            au = dr.maximum(alpha_u.mean(), ALPHA_MIN)
-            av = dr.maximum(alpha_v.mean(), ALPHA_MIN)
-            self.row = table.at(au if alpha_v is alpha_u else dr.sqrt(au * av))
-
-    def __call__(self, mu, distr):
-        """(E(μ), E_avg) at the roughness of ``distr`` (a :class:`~.microfacet.Distribution`,
-        or a callable that makes it: only read when α varies)."""
-        if self.row is not None:
-            return self.row.albedo(mu), self.row.average
-        alpha = equivalent_alpha(distr() if callable(distr) else distr)
-        return self.table.albedo(mu, alpha), self.table.average_albedo(alpha)
-
-    def average(self, distr):
-        """E_avg alone, at the roughness of ``distr`` (as :meth:`__call__`)."""
-        if self.row is not None:
-            return self.row.average
-        return self.table.average_albedo(equivalent_alpha(distr() if callable(distr) else distr))
+    def _row(self, alpha):
+        """E on the μ nodes at one roughness, as pairs, interpolated in α."""
+        j, ty = _cell(dr.sqrt(dr.maximum(alpha, 0.0) / self.alpha_max), self.n_alpha)
+        size = 2 * (self.n_mu - 1)  # a row of pairs
+        if dr.is_jit_v(mi.Float):
+            k = dr.arange(mi.UInt32, size)
+            return dr.lerp(dr.gather(mi.Float, self._E, j * size + k),
+                           dr.gather(mi.Float, self._E, (j + 1) * size + k), ty)
+        start = int(j) * size
+        return (1.0 - ty) * self._E[start:start + size] + \
+            ty * self._E[start + size:start + 2 * size]
 
 
-class TwoSided:
-    """
-    E(μ) and E_avg of the two sides of an interface (:func:`dielectric_tables`: lit from above,
-    from below) at a surface's roughness, and the shares of :func:`transmitted_shares`
-    (``t_above`` = 1 − F_avg(η), ``eta`` the relative index).
-    """
+def uniform_alpha(alpha_u, alpha_v):
+    """The tables' isotropic roughness of a surface whose roughness textures are the same
+    everywhere (:func:`equivalent_alpha` of their values), else None."""
+    from .microfacet import ALPHA_MIN
 
-    def __init__(self, tables, alpha_u, alpha_v, t_above, eta):
-        self.sides = tuple(Albedos(t, alpha_u, alpha_v) for t in tables)
-        self.t_above, self.eta = t_above, eta
-
-    def __call__(self, mu, above, distr):
-        """(E(μ), E_avg) on the side ``above`` (a mask: True for the side the normal points
-        to), at the roughness of ``distr`` (as :meth:`Albedos.__call__`)."""
-        (e0, a0), (e1, a1) = (side(mu, distr) for side in self.sides)
-        return dr.select(above, e0, e1), dr.select(above, a0, a1)
-
-    def transmitted(self, distr):
-        """(x_above, x_below) at the roughness of ``distr``."""
-        averages = (side.average(distr) for side in self.sides)
-        return transmitted_shares(self.t_above, self.eta, *averages)
+    if alpha_u.is_spatially_varying() or alpha_v.is_spatially_varying():
+        return None
+    au = dr.maximum(alpha_u.mean(), ALPHA_MIN)
+    return au if alpha_v is alpha_u else dr.sqrt(au * dr.maximum(alpha_v.mean(), ALPHA_MIN))
 
 
 def equivalent_alpha(distr):
     """The isotropic roughness of the albedo tables: α, or sqrt(αu·αv) when anisotropic (the
     roughness of the same D(0); its error is measured in the validation report)."""
     return dr.sqrt(distr.alpha_u * distr.alpha_v) if distr.anisotropic else distr.alpha_u
-
-
-class Row:
-    """E(μ) at one roughness (:meth:`Table.at`; ``pairs`` of its ``n_mu`` nodes as
-    :func:`_node_pairs` stores them): ``albedo(mu)`` linear in sqrt μ, and the roughness's
-    ``average`` E_avg."""
-
-    def __init__(self, pairs, n_mu, average):
-        self._pairs, self.n_mu, self.average = pairs, n_mu, average
-
-    def albedo(self, mu):
-        """E(μ), linear in sqrt μ between the nodes."""
-        i, t = _cell(dr.sqrt(dr.maximum(mu, 0.0)), self.n_mu)
-        return dr.lerp(*_pair(self._pairs, i), t)
 
 
 def lobe(e_i, e_o, e_avg):

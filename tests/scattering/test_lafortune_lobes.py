@@ -18,6 +18,7 @@ from mi_brdfs.reference import Lafortune
 from mi_brdfs.reference.lafortune import cosine_lobe_integral
 from mi_brdfs.reference.quadrature import hemisphere_albedo
 from mi_brdfs.scattering import lafortune as terms
+from mi_brdfs.scattering import mixture
 
 #: (Cx, Cy, Cz, n): Phong's mirror lobe, retro-reflection, off-specular towards grazing, an
 #: anisotropic one with a negative Cz, one along the normal only, no lobe at all.
@@ -80,13 +81,20 @@ def test02_sampler_matches_its_density(variant_llvm_ad_rgb, wi):
 
 
 def test03_strategy_choice(variant_llvm_ad_rgb):
-    """choose() picks strategy k with probability pₖ = wₖ/Σw; one of weight 0 never; equal
-    probabilities where every weight is 0."""
+    """mixture.choose() picks strategy k with probability pₖ = wₖ/Σw; one of weight 0 never;
+    equal probabilities where every weight is 0; the rescaled number is uniform in [0, 1)
+    within each strategy's interval."""
     u = mi.Float((np.arange(100_000) + 0.5) / 100_000)
-    probs = terms.probabilities([mi.Float(0.4), mi.Float(0.0), mi.Float(1.2), mi.Float(0.4)])
-    counts = np.bincount(np.array(terms.choose(probs, u)), minlength=4) / 100_000
+    probs = mixture.probabilities([mi.Float(0.4), mi.Float(0.0), mi.Float(1.2), mi.Float(0.4)])
+    k, rescaled = mixture.choose(probs, u)
+    counts = np.bincount(np.array(k), minlength=4) / 100_000
     np.testing.assert_allclose(counts, [0.2, 0.0, 0.6, 0.2], atol=1e-4)
-    equal = terms.probabilities([mi.Float(0.0), mi.Float(0.0)])
+    for j in (0, 2, 3):
+        within = np.sort(np.array(rescaled)[np.array(k) == j])
+        assert 0.0 <= within[0] and within[-1] < 1.0 + 1e-6
+        np.testing.assert_allclose(within, (np.arange(len(within)) + 0.5) / len(within),
+                                   atol=2e-4)
+    equal = mixture.probabilities([mi.Float(0.0), mi.Float(0.0)])
     assert [float(p[0]) for p in equal] == [0.5, 0.5]
 
 
