@@ -7,7 +7,9 @@ function of the package that takes a BSDF takes all four, through this module:
 
 * :func:`parse`: the spec in canonical form (a command-line string becomes a dict or an XML
   fragment, once), with one-line errors for what is no BSDF spec at all;
-* :func:`load_bsdf`: a ``mi.BSDF`` in the current variant;
+* :func:`load_bsdf`: a ``mi.BSDF`` in the current variant (within :func:`loaded_once`, the
+  same object for the same spec: a check that hands the spec to several helpers loads it
+  once);
 * :func:`to_xml`: an XML ``<bsdf>`` element to put into a scene file, for every form (a loaded
   ``mi.BSDF`` through a plugin registered to return that very object);
 * :func:`describe`: a short name for tables and legends.
@@ -15,7 +17,9 @@ function of the package that takes a BSDF takes all four, through this module:
 
 from __future__ import annotations
 
+import contextlib
 import itertools
+import json
 import os
 import re
 import shlex
@@ -54,6 +58,39 @@ def parse(spec):
                        f"an XML fragment, 'type key=value ...' or a loaded mi.BSDF")
 
 
+#: spec key -> loaded BSDF while :func:`loaded_once` is active, else None
+_loaded: dict | None = None
+
+
+@contextlib.contextmanager
+def loaded_once():
+    """
+    Within (a ``with`` block, or a function it decorates): :func:`load_bsdf` loads each spec
+    once per variant and returns the same ``mi.BSDF`` for it again. The checks and the
+    commands that run them open it, so that one check call loads its BSDF once; nested uses
+    share the outermost one. The objects are the caller's to read, not to change.
+    """
+    global _loaded
+    outer = _loaded is not None
+    if not outer:
+        _loaded = {}
+    try:
+        yield
+    finally:
+        if not outer:
+            _loaded = None
+
+
+def _key(spec) -> str:
+    """The identity of a parsed spec for :func:`loaded_once`: its content (objects inside a
+    dict, such as a texture or a transform, by identity: they live as long as the call)."""
+    import mitsuba as mi
+
+    text = spec if isinstance(spec, str) else json.dumps(
+        spec, sort_keys=True, default=lambda o: f"<{type(o).__name__} {id(o)}>")
+    return f"{mi.variant()}: {text}"
+
+
 def load_bsdf(spec):
     """
     A ``mi.BSDF`` in the current variant from any form of spec (a ``mi.BSDF`` is returned as is).
@@ -65,6 +102,9 @@ def load_bsdf(spec):
     spec = parse(spec)
     if isinstance(spec, mi.BSDF):
         return spec
+    key = _key(spec) if _loaded is not None else None
+    if key is not None and key in _loaded:
+        return _loaded[key]
     try:
         if isinstance(spec, dict):
             obj = mi.load_dict(spec)
@@ -77,6 +117,8 @@ def load_bsdf(spec):
         raise MiBrdfsError(mitsuba_error_line(e)) from None
     if not isinstance(obj, mi.BSDF):
         raise MiBrdfsError(f"{describe(spec)} is a {type(obj).__name__}, not a BSDF")
+    if key is not None:
+        _loaded[key] = obj
     return obj
 
 

@@ -196,7 +196,7 @@ def figure(result: Comparison, path, title: str | None = None) -> str:
 
 def write_outputs(result: Comparison, out: str | Path) -> list[str]:
     """The figure ``out`` (PNG) plus A, B and B − A as float32 EXRs beside it."""
-    from . import __version__
+    from ._version import __version__
     from .imageio import write_exr
 
     out = Path(out)

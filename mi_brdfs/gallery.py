@@ -212,7 +212,7 @@ def render_tiles(rows=ROWS, spp: int = DEFAULT_SPP, res: int = DEFAULT_RES, seed
     """
     import mitsuba as mi
 
-    from . import __version__
+    from ._version import __version__
     from .imageio import write_exr
     from .progress import Progress
     from .registry import use_variant

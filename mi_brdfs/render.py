@@ -61,7 +61,7 @@ class RenderResult:
         import drjit as dr
         import mitsuba as mi
 
-        from . import __version__
+        from ._version import __version__
         return {
             "software": f"mi_brdfs {__version__} "
                         f"(Mitsuba {mi.__version__}, drjit {dr.__version__})",

@@ -81,8 +81,8 @@ def _worker_init(variant: str) -> None:
     try:
         import drjit as dr
 
-        import mi_brdfs
-        mi_brdfs.use_variant(variant, fallback=False)
+        from .registry import use_variant
+        use_variant(variant, fallback=False)
         dr.set_thread_count(1)
     except Exception as e:  # an initializer that raises makes Pool respawn workers forever
         _worker_error = e

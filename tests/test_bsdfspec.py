@@ -150,3 +150,20 @@ def test07_every_command_takes_a_quoted_spec(variant_scalar_rgb, tmp_path, monke
         assert seen == [{"type": "roughconductor", "alpha": 0.3}, {"type": "diffuse"}]
     elif command == "furnace":
         assert "roughconductor(alpha=0.3)" in out.out
+
+
+def test08_a_check_loads_its_spec_once(variant_llvm_ad_rgb, monkeypatch):
+    """One check call loads its BSDF once, however many helpers it hands the spec to (the
+    battery runs a dozen); outside a check, each load_bsdf is a fresh object, as a caller
+    that changes its BSDF through mi.traverse expects."""
+    loads = []
+    load_dict = mi.load_dict
+    monkeypatch.setattr(mi, "load_dict", lambda d, *a, **k: loads.append(d) or load_dict(d))
+    spec = "roughconductor alpha=0.3"
+    assert checks.run_battery(spec, quick=True)
+    assert len(loads) == 1, loads
+    assert bsdfspec.load_bsdf(spec) is not bsdfspec.load_bsdf(spec)
+    with bsdfspec.loaded_once():
+        assert bsdfspec.load_bsdf(spec) is bsdfspec.load_bsdf(spec)
+        other = bsdfspec.load_bsdf("roughconductor alpha=0.4")
+        assert other is not bsdfspec.load_bsdf(spec)

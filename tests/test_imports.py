@@ -15,7 +15,12 @@ def _module_name(path: Path, root: Path) -> str:
 
 
 def import_graph(root: Path = PACKAGE) -> dict[str, set[str]]:
-    """module -> the package's modules it imports (``from . import x`` resolved to ``.x``)."""
+    """
+    module -> the package's modules it imports. ``import x.y`` depends on ``x.y``;
+    ``from x import a`` on the submodule ``x.a`` where ``a`` is one, else on ``x`` itself
+    (``a`` is then an attribute of its ``__init__``, such as ``from .. import __version__``),
+    relative imports resolved; an import of the root package (``import mi_brdfs``) counts.
+    """
     modules = {_module_name(p, root): p for p in root.rglob("*.py")}
     graph = {name: set() for name in modules}
     for name, path in modules.items():
@@ -28,15 +33,24 @@ def import_graph(root: Path = PACKAGE) -> dict[str, set[str]]:
                 if node.level:
                     anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
                     base = ".".join(anchor + ([base] if base else []))
-                targets = [f"{base}.{a.name}" for a in node.names] + [base]
+                targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base
+                           for a in node.names]
             else:
                 continue
             for target in targets:
                 while target and target not in modules:  # x.y.function -> x.y
                     target = target.rpartition(".")[0]
-                if target and target != name and not name.startswith(target + "."):
+                if target and target != name:
                     graph[name].add(target)
     return graph
+
+
+def root_imports(graph: dict[str, set[str]]) -> list[str]:
+    """The modules that import the root package (its ``__init__``: the public entry, which
+    imports nearly everything), other than the command line's own."""
+    root = min(graph, key=len)
+    return sorted(m for m, targets in graph.items()
+                  if root in targets and not m.startswith(f"{root}.cli") and m != f"{root}.__main__")
 
 
 def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
@@ -83,3 +97,30 @@ def test02_a_cycle_is_found(tmp_path):
     (pkg / "sub" / "b.py").write_text("def f():\n    from ..a import g\n")
     cycle = find_cycle(import_graph(pkg))
     assert cycle is not None and set(cycle) == {"mi_brdfs.a", "mi_brdfs.sub.b"}
+
+
+def test03_no_module_imports_the_root_package():
+    """
+    The root package (``mi_brdfs/__init__.py``) is the public entry: it registers the plugins
+    and imports the layers below. A module under it that imports it back (``import mi_brdfs``,
+    ``from .. import __version__``) hides an upward dependency; each takes what it needs from
+    the module that defines it (``registry``, ``_version``).
+    """
+    graph = import_graph()
+    assert "mi_brdfs.cli.commands" in graph
+    assert root_imports(graph) == []
+
+
+def test04_a_root_import_is_found(tmp_path):
+    """The graph sees ``import mi_brdfs`` and ``from .. import attribute`` as imports of the
+    root, and ``from .. import submodule`` as an import of the submodule only."""
+    pkg = tmp_path / "mi_brdfs"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("__version__ = '0'\n")
+    (pkg / "a.py").write_text("def f():\n    import mi_brdfs\n")
+    (pkg / "sub" / "__init__.py").write_text("")
+    (pkg / "sub" / "b.py").write_text("from .. import __version__\n")
+    (pkg / "sub" / "c.py").write_text("from .. import a\nfrom . import b\n")
+    graph = import_graph(pkg)
+    assert root_imports(graph) == ["mi_brdfs.a", "mi_brdfs.sub.b"]
+    assert graph["mi_brdfs.sub.c"] == {"mi_brdfs.a", "mi_brdfs.sub.b"}

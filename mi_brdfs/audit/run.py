@@ -155,7 +155,7 @@ def _code_hash() -> str:
 def cache_key(case: grid.Case, variant: str, quick: bool) -> str:
     import mitsuba as mi
 
-    from .. import __version__
+    from .._version import __version__
     text = repr((case.bsdf, case.config, case.spec, case.polarized, variant, quick,
                  mi.__version__, __version__, _code_hash()))
     return hashlib.sha1(text.encode()).hexdigest()[:16]

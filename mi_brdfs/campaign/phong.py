@@ -7,12 +7,12 @@ import math
 import mitsuba as mi
 import numpy as np
 
-import mi_brdfs
 from .. import checks
 from ..checks import batch
 from ..imageio import to_srgb8
 from ..plots import pyplot, save_figure
 from ..reference import Phong, hemisphere_albedo
+from ..registry import use_variant
 from .core import Context, Row, Section, image, md_table
 
 FORMS = ("normalized", "lecture", "original")
@@ -252,14 +252,14 @@ def furnace_figure(ctx: Context, s: Section) -> str:
 
 
 def scalar_pass(ctx: Context, s: Section) -> None:
-    mi_brdfs.use_variant(ctx.scalar_variant)
+    use_variant(ctx.scalar_variant)
     for form in FORMS:
         sp = spec(form, "mirror", 30.0, 0.5, 0.5)
         s.rows.append(Row.of(f"phong {form} ({ctx.scalar_variant})",
                              checks.check_consistency(sp, n=ctx.n(1000, 200))))
         s.rows.append(Row.of(f"phong {form} ({ctx.scalar_variant})",
                              checks.check_stability(sp, n_random=ctx.n(300, 50))))
-    mi_brdfs.use_variant(ctx.variant)
+    use_variant(ctx.variant)
 
 
 def section(ctx: Context) -> Section:

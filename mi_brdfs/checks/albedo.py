@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import mitsuba as mi
 import numpy as np
 
-from ..bsdfspec import describe, load_bsdf
+from ..bsdfspec import describe, load_bsdf, loaded_once
 from ..errors import (
     arguments, counts, nonnegative, positive, valid_angle, valid_angles, valid_seed,
 )
@@ -208,6 +208,7 @@ class AlbedoCurve:
         return "\n".join(lines)
 
 
+@loaded_once()
 @counts("n")
 @arguments(thetas_deg=valid_angles(180.0, "degrees"), seed=valid_seed)
 def albedo_curve(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, seed: int = 0,
@@ -267,6 +268,7 @@ def albedo_curve(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, seed: in
     return curve
 
 
+@loaded_once()
 @counts("n")
 @arguments(thetas_deg=valid_angles(180.0, "degrees"), sigmas=positive)
 def check_energy(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, sigmas: float = 5.0,
@@ -319,6 +321,7 @@ def check_energy(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None, sigmas: 
 AGREEMENT_RTOL = 5e-3
 
 
+@loaded_once()
 @counts("n")
 @arguments(thetas_deg=valid_angles(180.0, "degrees"), sigmas=positive, rtol=nonnegative)
 def check_albedo_agreement(spec, thetas_deg=DEFAULT_THETAS, n: int | None = None,

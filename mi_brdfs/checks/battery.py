@@ -9,7 +9,7 @@ import time
 
 import mitsuba as mi
 
-from ..bsdfspec import load_bsdf
+from ..bsdfspec import load_bsdf, loaded_once
 from ..progress import Progress
 from . import batch
 from .albedo import albedo_curve, check_albedo_agreement, check_energy
@@ -25,6 +25,7 @@ from .stability import check_stability
 CHI2_THETAS = (0.0, 45.0, 84.26)
 
 
+@loaded_once()
 def run_battery(spec, quick: bool = False, render: bool = False, chi2_res: int | None = None,
                 chi2_ires: int | None = None, progress: bool = True) -> list[CheckResult]:
     """

@@ -18,7 +18,7 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
-from ..bsdfspec import describe, load_bsdf
+from ..bsdfspec import describe, load_bsdf, loaded_once
 from ..errors import arguments, counts, nonnegative, valid_seed
 from . import batch
 from .result import CheckResult
@@ -84,6 +84,7 @@ def conditioning(bsdf, wi: np.ndarray, wo: np.ndarray, ctx=None, seed: int = 0) 
     return spread
 
 
+@loaded_once()
 @counts("n")
 @arguments(seed=valid_seed, rtol=nonnegative)
 def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = RTOL,

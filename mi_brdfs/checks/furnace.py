@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import mitsuba as mi
 import numpy as np
 
-from ..bsdfspec import describe
+from ..bsdfspec import describe, loaded_once
 from ..errors import arguments, counts, nonnegative, valid_seed
 from ..scenes import load_scene
 from .result import CheckResult
@@ -104,6 +104,7 @@ def _reflected_albedo(spec, n: int | None) -> np.ndarray:
     return np.array(rows)
 
 
+@loaded_once()
 @counts("spp", "res", "n")
 @arguments(seed=valid_seed)
 def furnace_render(spec, spp: int = 64, res: int = 64, seed: int = 0, max_depth: int = 2,
@@ -141,6 +142,7 @@ def furnace_render(spec, spp: int = 64, res: int = 64, seed: int = 0, max_depth:
                          nonfinite=int((~finite).sum()), expected=expected, spp=spp, res=res)
 
 
+@loaded_once()
 @counts("spp", "res")
 @arguments(tol=nonnegative)
 def check_furnace(spec, spp: int = 64, res: int = 64, tol: float = 0.005, **kwargs) -> CheckResult:

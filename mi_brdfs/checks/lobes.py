@@ -21,7 +21,7 @@ import math
 import mitsuba as mi
 import numpy as np
 
-from ..bsdfspec import describe, load_bsdf
+from ..bsdfspec import describe, load_bsdf, loaded_once
 from ..errors import arguments, counts, positive, valid_seed
 from . import batch
 from .albedo import sphere_quadrature
@@ -48,6 +48,7 @@ def _sampled_albedo(bsdf, theta: float, n: int, seed: int, ctx):
     return w.mean(axis=0), w.std(axis=0, ddof=1) / math.sqrt(n), s
 
 
+@loaded_once()
 @counts("n")
 @arguments(seed=valid_seed, sigmas=positive)
 def check_lobes(spec, n: int | None = None, seed: int = 0, sigmas: float = 5.0) -> CheckResult:
@@ -119,6 +120,7 @@ def pdf_integral(bsdf, theta: float, n_mu: int = 256, n_phi: int = 256, ctx=None
 PDF_MAX_JUDGED = 50.0
 
 
+@loaded_once()
 @counts("n")
 @arguments(seed=valid_seed, sigmas=positive)
 def check_pdf_integral(spec, n: int | None = None, seed: int = 0,

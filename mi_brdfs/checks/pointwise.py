@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..bsdfspec import describe, load_bsdf
+from ..bsdfspec import describe, load_bsdf, loaded_once
 from ..errors import arguments, counts, nonnegative, valid_seed
 from . import batch
 from .result import CheckResult
@@ -20,6 +20,7 @@ def _rel(a: np.ndarray, b: np.ndarray, atol: float) -> np.ndarray:
     return np.where(np.abs(a - b) <= atol, 0.0, err)
 
 
+@loaded_once()
 @counts("n")
 @arguments(seed=valid_seed, rtol=nonnegative, atol=nonnegative)
 def check_equal(spec_a, spec_b, n: int | None = None, seed: int = 0, rtol: float = 1e-5,

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..bsdfspec import load_bsdf
+from ..bsdfspec import load_bsdf, loaded_once
 from ..errors import arguments, counts, valid_angles, valid_seed
 from . import batch
 
@@ -35,6 +35,7 @@ class Precision:
     count: int
 
 
+@loaded_once()
 @counts("n")
 @arguments(seed=valid_seed, thetas=valid_angles(180.0, "degrees"))
 def eval_precision(spec, n: int | None = None, seed: int = 0, thetas=THETAS) -> Precision | None:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
-from ..bsdfspec import describe, load_bsdf
+from ..bsdfspec import describe, load_bsdf, loaded_once
 from ..errors import arguments, counts, nonnegative, valid_seed
 from . import batch
 from .result import CheckResult
@@ -34,6 +34,7 @@ def _angles(v: np.ndarray) -> str:
     return f"(θ {theta:.1f}°, φ {phi:.1f}°)"
 
 
+@loaded_once()
 @counts("n")
 @arguments(seed=valid_seed, min_cos=nonnegative)
 def reciprocity(spec, n: int | None = None, seed: int = 0, min_cos: float = 1e-3):
@@ -76,6 +77,7 @@ def expected_asymmetry(bsdf) -> str | None:
     return None
 
 
+@loaded_once()
 @counts("n")
 @arguments(seed=valid_seed, rtol=nonnegative)
 def check_reciprocity(spec, n: int | None = None, seed: int = 0, rtol: float = RTOL) -> CheckResult:
@@ -106,6 +108,7 @@ def check_reciprocity(spec, n: int | None = None, seed: int = 0, rtol: float = R
                                 "fraction_above_tol": float((r["asym"] > tol).mean())})
 
 
+@loaded_once()
 @counts("n")
 @arguments(seed=valid_seed)
 def check_positivity(spec, n: int | None = None, seed: int = 1) -> CheckResult:

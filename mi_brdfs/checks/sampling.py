@@ -13,7 +13,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..bsdfspec import describe, load_bsdf
+from ..bsdfspec import describe, load_bsdf, loaded_once
 from ..errors import MiBrdfsError, arguments, counts, fraction, valid_direction, valid_seed
 from . import batch
 from .result import CheckResult
@@ -160,6 +160,7 @@ def chi2_settings(bsdf, wi, ctx=None, n: int = 20_000):
     raise AssertionError("unreachable")
 
 
+@loaded_once()
 @counts("res", "ires", "sample_count", "test_count")
 @arguments(wi=valid_direction, seed=valid_seed, significance=fraction)
 def chi2_bsdf(bsdf, wi=(0.0, 0.0, 1.0), ctx=None, res: int | None = 101, ires: int | None = 4,

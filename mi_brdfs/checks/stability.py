@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..bsdfspec import describe, load_bsdf
+from ..bsdfspec import describe, load_bsdf, loaded_once
 from ..errors import MiBrdfsError, arguments, counts, nonempty_specs, valid_seed
 from . import batch
 from .result import CheckResult
@@ -88,6 +88,7 @@ def _count(name: str, values: np.ndarray, labels, row: StabilityRow) -> None:
             row.worst.append((name, what, labels[i], values[i].tolist()))
 
 
+@loaded_once()
 @counts("n_random")
 @arguments(seed=valid_seed)
 def sweep_one(spec, n_random: int | None = None, seed: int = 0) -> StabilityRow:
@@ -144,6 +145,7 @@ def parameter_grid(base: dict, **axes) -> list[dict]:
             for values in itertools.product(*(axes[k] for k in names))]
 
 
+@loaded_once()
 @counts("n_random")
 @arguments(specs=nonempty_specs, seed=valid_seed)
 def check_stability(specs, n_random: int | None = None, seed: int = 0) -> CheckResult:

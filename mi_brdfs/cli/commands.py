@@ -8,6 +8,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..bsdfspec import loaded_once
+
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
 
@@ -35,6 +37,7 @@ def _thetas(text):
     return values
 
 
+@loaded_once()
 def cmd_check(args) -> int:
     import json
 
@@ -66,6 +69,7 @@ def cmd_check(args) -> int:
     return 1 if failed else 0
 
 
+@loaded_once()
 def cmd_furnace(args) -> int:
     import mi_brdfs
     from ..bsdfspec import describe

@@ -344,11 +344,11 @@ def _fit(target: dict, model: dict, free, sizes: dict):
     import drjit as dr
     import mitsuba as mi
 
-    import mi_brdfs
     from ..fit import fit
+    from ..registry import llvm_usable
 
     ad = dr.is_diff_v(mi.Float) and mi.is_rgb and not mi.is_polarized
-    if not ad and not mi_brdfs.llvm_usable():
+    if not ad and not llvm_usable():
         raise MiBrdfsError("fits need llvm_ad_rgb, which this machine lacks")
     # fit hands this variant back when it returns or raises; the plugins' warnings about the
     # models it loads on the way (a start whose ρd + ks exceeds 1) are no news to the user:
@@ -366,7 +366,7 @@ def _cached_fit(store, fit_sizes: dict):
     The ``fit_fn(target, model, free)`` of :func:`candidates_for`: :func:`_fit` with
     ``fit_sizes`` (in llvm_ad_rgb where the current variant has no AD), its result (or the note why it failed) stored in ``store``.
     """
-    from .. import __version__
+    from .._version import __version__
 
     def fit_fn(target, model, free):
         key = _key("fit", target, model, free, fit_sizes, __version__, "flags")

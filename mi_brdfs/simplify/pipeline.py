@@ -215,10 +215,10 @@ def _use_variant(variant: str | None) -> str:
     """The variant measured in: ``variant``, else the current one, else the default."""
     import mitsuba as mi
 
-    import mi_brdfs
+    from ..registry import use_variant
 
     if variant is not None or mi.variant() is None:
-        mi_brdfs.use_variant(variant)
+        use_variant(variant)
     return mi.variant()
 
 
@@ -246,7 +246,7 @@ def _engine(path: Path, data: bytes, report_dir: Path | None, cache, variant: st
     whose measurements are stored under a key of every setting."""
     import mitsuba as mi
 
-    from .. import __version__
+    from .._version import __version__
 
     if cache is True:
         cache_dir = (report_dir / "cache") if report_dir else default_cache_dir()
