@@ -10,7 +10,7 @@ exactly, so the mean weight converges to ∫ f cosθo dωo, the albedo of ``eval
 visible normals for Beckmann would not do: Mitsuba's sampler draws the exact distribution but
 its pdf uses Walter's rational G1, so the mean weight departs from ∫ f cosθo by up to 3e-3.)
 E_avg = 2∫E(μ)μ dμ is the exact integral of the interpolant that
-:class:`~mi_brdfs.scattering.multiscatter.Table` evaluates (piecewise linear in x = sqrt μ:
+:class:`~mi_brdfs.scattering.multiscatter.AlbedoTable` evaluates (piecewise linear in x = sqrt μ:
 E_avg = 4∫E(x)x³dx, a cubic per segment, by Gauss-Legendre with 3 nodes per segment).
 """
 

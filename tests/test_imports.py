@@ -49,8 +49,9 @@ def root_imports(graph: dict[str, set[str]]) -> list[str]:
     """The modules that import the root package (its ``__init__``: the public entry, which
     imports nearly everything), other than the command line's own."""
     root = min(graph, key=len)
+    command_line = (f"{root}.cli", f"{root}.__main__")
     return sorted(m for m, targets in graph.items()
-                  if root in targets and not m.startswith(f"{root}.cli") and m != f"{root}.__main__")
+                  if root in targets and not m.startswith(command_line))
 
 
 def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:

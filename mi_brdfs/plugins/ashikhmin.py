@@ -155,7 +155,8 @@ class Ashikhmin(mi.BSDF):
     and reflects ωi about it (density per ωo: that over 4 k·h), the diffuse lobe draws the
     cosine-weighted hemisphere. ``sample()`` picks the glossy lobe with probability
     ws/(ws + wd), ws = Rs + (1 − Rs)(1 − cosθi/2)⁵ and wd = Rd (1 − Rs)(1 − (1 −
-    cosθi/2)⁵) with the textures' mean values: the bounds of the lobes' albedos at this
+    cosθi/2)⁵) with the textures' values at the hit point (mean over channels): the bounds
+    of the lobes' albedos at this
     incidence, so that towards grazing incidence, where the diffuse term vanishes, the
     glossy lobe takes every sample. ``pdf()`` and ``bs.pdf`` are the mixture density;
     samples below the horizon have weight 0.

@@ -183,7 +183,8 @@ class Lafortune(mi.BSDF):
     d = C∘ωi/‖C∘ωi‖, which ``sample()`` draws with density (n+1)/(2π)·cosⁿβ (Phong's
     sampler about d), or it draws the cosine-weighted hemisphere for the diffuse term. It picks
     among them in proportion to mean(ρd) and, per lobe, mean(ρs)·K·(‖C∘ωi‖/c)ⁿ·2π/(n+2) (the
-    lobe's albedo were d the normal: its weight follows ωi); ``pdf()`` and ``bs.pdf`` are
+    lobe's albedo were d the normal: its weight follows ωi; the means over channels at the hit
+    point); ``pdf()`` and ``bs.pdf`` are
     the mixture density over all lobes, and samples below the horizon have weight 0.
 
     A lobe whose reflectance is the constant 0 is left out entirely (flags, components,

@@ -23,9 +23,9 @@ SIGMA_MAX = math.pi / 2
 
 class RoughDiffuse(lobes.Diffuse):
     """
-    The lobe ρ/π·factor of Oren-Nayar's ``form`` and ``sigma`` (a Float or a texture), sampled by the cosine-weighted
-    hemisphere as the Lambertian lobe it generalises: computed as it computes, so that σ = 0
-    (factor exactly 1) is bit-identical to it.
+    The lobe ρ/π·factor of Oren-Nayar's ``form`` and ``sigma`` (a Float or a texture),
+    sampled by the cosine-weighted hemisphere as the Lambertian lobe it generalises: computed
+    as it computes, so that σ = 0 (factor exactly 1) is bit-identical to it.
     """
 
     def __init__(self, reflectance, sigma, form: str):

@@ -170,7 +170,8 @@ class Phong(mi.BSDF):
     **Sampling.** ``sample()`` picks the diffuse lobe (cosine-weighted hemisphere) or the
     specular one (cos α = u^(1/(n+1)) about R; for the halfway lobe H about N, then
     reflected, Jacobian 1/(4 V·H)) in proportion to their albedos at normal incidence with
-    the textures' mean values; ``pdf()`` and ``bs.pdf`` are the mixture density, and
+    the textures' values at the hit point (mean over channels); ``pdf()`` and ``bs.pdf`` are
+    the mixture density, and
     samples below the horizon have weight 0. Every form samples the same way.
 
     **Float32.** The lobe is evaluated as exp(n·log1p(−(1 − cos α))) with 1 − cos α free of

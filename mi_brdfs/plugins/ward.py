@@ -109,7 +109,8 @@ class Ward(mi.BSDF):
     curves. A warning says when ρd + ρs > 1 (values kept).
 
     **Sampling.** ``sample()`` picks the glossy lobe with probability mean(ρs)/(mean(ρs) +
-    mean(ρd)) (Mitsuba 0.6's choice), else the cosine-weighted hemisphere. The lobe draws the
+    mean(ρd)) (Mitsuba 0.6's choice; the means over channels at the hit point), else the
+    cosine-weighted hemisphere. The lobe draws the
     half vector by Ward's 1992 recipe, whose density Walter (2005, "Notes on the Ward BRDF")
     showed to be E/(π αu αv hz³) per solid angle of the normalised half vector, and reflects
     ωi about it; ``pdf()`` and ``bs.pdf`` are the mixture density with that lobe density
