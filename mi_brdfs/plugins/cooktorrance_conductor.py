@@ -175,10 +175,9 @@ class Compensation(lobes.CosineLobe):
         self.source, self.component, self.flags = source, source.component, source.flags
         #: F_ms/(π (1 − E_avg)) where the roughness and F_avg are constants as well
         self.factor = None
-        f_avg = source.f_avg if source.fresnel != "none" else 1.0
-        if source.table.row is not None and f_avg is not None:
-            self.factor = _factor(None if source.fresnel == "none" else f_avg,
-                                  source.table.row_average)
+        if source.table.row is not None and (source.fresnel == "none" or
+                                             source.f_avg is not None):
+            self.factor = _factor(source.fresnel_average(None, True), source.table.row_average)
             dr.make_opaque(self.factor)
 
     def _scale(self, si, active):

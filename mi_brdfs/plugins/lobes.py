@@ -23,6 +23,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..scattering import mixture
+from .properties import clip_at
 
 
 def flag(*names: str) -> int:
@@ -159,7 +160,7 @@ class Diffuse(CosineLobe):
         self.reflectance, self.component = reflectance, component
 
     def rho(self, si, active):
-        from .properties import clip_at
+        """ρ at ``si``, clipped into [0, 1]."""
         return clip_at(self.reflectance, si, active)
 
     def value(self, si, wo, active):
@@ -179,8 +180,9 @@ class Diffuse(CosineLobe):
 
 class Mixture:
     """
-    The lobes of one BSDF, in component order; :meth:`sample` and :meth:`eval_pdf` run the
-    lobes the context enables. ``two_sided``: ωi may come from below the surface (a
+    The lobes of one BSDF, in the order :meth:`sample` picks them with its first random number
+    (the glossy lobes first, by convention); :meth:`sample` and :meth:`eval_pdf` run the lobes
+    the context enables. ``two_sided``: ωi may come from below the surface (a
     transmitting interface); else the BSDF is 0 for ωi below, as Mitsuba's ``diffuse``.
     """
 
@@ -235,7 +237,7 @@ class Mixture:
         probs = self.probabilities(ctx, si, lobes, active)
         k, u = mixture.choose(probs, sample1)
         bs.wo, valid, bs.sampled_type, bs.sampled_component, bs.eta = _draw(
-            lobes, k, lambda lobe: (*lobe.sample(ctx, si, u, sample2, active),), si)
+            lobes, k, lambda lobe: lobe.sample(ctx, si, u, sample2, active), si)
         active = active & valid
         value, bs.pdf = self.eval_pdf(ctx, si, bs.wo, active, probs)
         return bs, weight(value, bs.pdf, active)
