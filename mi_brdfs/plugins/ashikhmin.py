@@ -167,6 +167,10 @@ class Ashikhmin(mi.BSDF):
     exp(e·log1p(−(1 − cosθh))), so that exponents from 0 to 10⁶ and beyond give no NaN or
     Inf at any direction, grazing ones included.
 
+    **Polarized variants.** The model describes no polarization: ``eval`` and the sample
+    weights are depolarizers (the Mueller matrix with the value in its first element alone), as
+    Mitsuba's ``diffuse`` returns them.
+
     .. tabs::
         .. code-tab:: xml
 

@@ -352,6 +352,17 @@ class CookTorrance(mi.BSDF):
     x = T_avg·K/(1 − E_avg), K the smaller 1 − E_avg of the two sides. ks and kt scale the
     two parts, and radiance through refraction is divided by η² as for the single scattering.
 
+    **Polarized variants.** With ``fresnel`` = ``exact`` the microfacet lobe returns the
+    Mueller matrix of specular reflection at the facet m (the conductor's or dielectric's
+    Fresnel amplitudes for s and p light and their phase difference), its reference frames
+    rotated from the plane of reflection into the Stokes bases of the incident and outgoing
+    directions (:func:`mi_brdfs.scattering.fresnel.polarized_reflection`): with ``smith`` the
+    values of ``roughconductor`` (tested element by element and through the ``stokes``
+    integrator). ``schlick`` (an approximation of the unpolarized reflectance, without the
+    phases) and ``none`` give depolarizers, and so do the diffuse base and the compensation,
+    added to the lobe's matrix. With ``transmission`` both lobes are depolarizers, as
+    ``roughdielectric``'s are in Mitsuba 3.9.1.
+
     .. tabs::
         .. code-tab:: xml
 

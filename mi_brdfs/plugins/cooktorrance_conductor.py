@@ -67,7 +67,7 @@ class MicrofacetReflection(lobes.Lobe):
         if t is None:
             return mi.Spectrum(0.0), mi.Float(0.0)
         # f·cosθo = ks F D G / (4 cosθi cosθo) · cosθo
-        value = self._ks_f(si, t.cos_im, t.D * t.G / (4.0 * si.wi.z), t.active)
+        value = self._reflect(ctx, si, wo, t, t.D * t.G / (4.0 * si.wi.z), t.active)
         return dr.select(t.active, value, 0.0), dr.select(t.active, t.pdf, 0.0)
 
     def sample_weight(self, ctx, si, wo, active):
@@ -82,7 +82,7 @@ class MicrofacetReflection(lobes.Lobe):
         else:
             shape = t.G * t.cos_om / dr.maximum(si.wi.z * t.m.z, 1e-30)
         ok = t.active & (t.pdf > 0)
-        return dr.select(ok, self._ks_f(si, t.cos_im, shape, ok), 0.0), \
+        return dr.select(ok, self._reflect(ctx, si, wo, t, shape, ok), 0.0), \
             dr.select(t.active, t.pdf, 0.0)
 
     def _terms(self, si, wo, active):
@@ -149,6 +149,20 @@ class MicrofacetReflection(lobes.Lobe):
         if self.fresnel == "exact":
             return multiscatter.fresnel_average(eta, k)
         return multiscatter.schlick_average(fresnel.r0(eta, k))
+
+    def _reflect(self, ctx, si, wo, t, factor, active):
+        """ks·factor·F at the facet of the terms ``t``: F per channel, and in polarized variants
+        with ``fresnel`` 'exact' the Mueller matrix of the reflection
+        (:func:`~mi_brdfs.scattering.fresnel.polarized_reflection`), as ``roughconductor``."""
+        if not (mi.is_polarized and self.fresnel == "exact"):
+            return self._ks_f(si, t.cos_im, factor, active)
+        F = fresnel.polarized_reflection(
+            si.wi, wo, t.m, properties.clip_at(self.eta, si, active, 0.0, dr.inf),
+            properties.clip_at(self.k, si, active, 0.0, dr.inf),
+            ctx.mode == mi.TransportMode.Radiance)
+        # F scaled per channel: the product with the diagonal matrix of ks·factor
+        scale = mi.UnpolarizedSpectrum(properties.clip_at(self.specular, si, active) * factor)
+        return F @ mi.Spectrum(scale)
 
     def _ks_f(self, si, cos_theta, factor, active):
         """ks·factor·F(cosθ), F at the cosine between ωi and the facet normal."""

@@ -194,6 +194,10 @@ class Lafortune(mi.BSDF):
     or negative value is returned anywhere from n = 0 to 1e30, for C = 0 and at grazing
     angles.
 
+    **Polarized variants.** The model describes no polarization: ``eval`` and the sample
+    weights are depolarizers (the Mueller matrix with the value in its first element alone), as
+    Mitsuba's ``diffuse`` returns them.
+
     .. tabs::
         .. code-tab:: xml
 

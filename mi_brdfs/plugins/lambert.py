@@ -34,6 +34,10 @@ class Lambert(mi.BSDF):
     direction is below the surface), like Mitsuba's ``diffuse``, and computes exactly what
     ``diffuse`` computes, in the same order, so both render bit-identical images in JIT variants.
 
+    **Polarized variants.** The model describes no polarization: ``eval`` and the sample
+    weights are depolarizers (the Mueller matrix with the value in its first element alone), as
+    Mitsuba's ``diffuse`` returns them.
+
     .. tabs::
         .. code-tab:: xml
 

@@ -55,9 +55,12 @@ def choose(mask, a, b):
 
 
 def depolarize(value):
-    """A spectrum as the variant returns BSDF values: a depolarizing Mueller matrix in polarized
-    variants, itself elsewhere."""
-    return mi.depolarizer(value) if mi.is_polarized else value
+    """A lobe's value as the variant returns BSDF values: in polarized variants a spectrum
+    becomes a depolarizing Mueller matrix (as Mitsuba's ``diffuse`` returns), and a Mueller
+    matrix (a lobe that models polarization) stays as it is; elsewhere the value itself."""
+    if mi.is_polarized and not isinstance(value, mi.Spectrum):
+        return mi.depolarizer(mi.UnpolarizedSpectrum(value))
+    return value
 
 
 def vector(v):
@@ -211,10 +214,10 @@ class Mixture:
             return depolarize(value), pdf
         probs = probabilities or self.probabilities(ctx, si, lobes, active)
         values, pdfs = zip(*(lobe.eval_pdf(ctx, si, wo, active) for lobe in lobes))
-        value = values[0]
+        value = depolarize(values[0])
         for v in values[1:]:
-            value = value + v
-        return depolarize(value), mixture.pdf(probs, pdfs)
+            value = value + depolarize(v)
+        return value, mixture.pdf(probs, pdfs)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
         """(BSDFSample3f, weight f·|cosθo|/pdf): ``sample1`` picks a lobe (and, rescaled, is

@@ -106,6 +106,10 @@ class OrenNayar(mi.BSDF):
     at most ρ(A + B) ≤ 1.45 ρ (qualitative), so rough surfaces render with little more noise
     than Lambert's.
 
+    **Polarized variants.** The model describes no polarization: ``eval`` and the sample
+    weights are depolarizers (the Mueller matrix with the value in its first element alone), as
+    Mitsuba's ``diffuse`` returns them.
+
     .. tabs::
         .. code-tab:: xml
 

@@ -187,6 +187,10 @@ class Phong(mi.BSDF):
     consistent, so the plugin acts as a mirror of reflectance ks·cosθo (normalized form), with
     no NaN, Inf or negative value anywhere (grazing, V = −L, N·L → 0) up to n = 1e30.
 
+    **Polarized variants.** The model describes no polarization: ``eval`` and the sample
+    weights are depolarizers (the Mueller matrix with the value in its first element alone), as
+    Mitsuba's ``diffuse`` returns them.
+
     .. tabs::
         .. code-tab:: xml
 

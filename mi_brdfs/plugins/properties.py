@@ -105,7 +105,7 @@ def clip_at(tex, si, active, lo: float = 0.0, hi: float = 1.0):
     a texture written in Python) and a value set later through ``mi.traverse`` reach the model
     only here, so that no negative or energy-creating value does.
     """
-    return clip(tex.eval(si, active), lo, hi)
+    return mi.UnpolarizedSpectrum(clip(tex.eval(si, active), lo, hi))
 
 
 def _range_text(lo: float, hi: float, lo_open: bool) -> str:

@@ -120,6 +120,10 @@ class Ward(mi.BSDF):
     A lobe whose reflectance is the constant 0 is left out entirely (flags, components,
     sampling, cost).
 
+    **Polarized variants.** The model describes no polarization: ``eval`` and the sample
+    weights are depolarizers (the Mueller matrix with the value in its first element alone), as
+    Mitsuba's ``diffuse`` returns them.
+
     .. tabs::
         .. code-tab:: xml
 

@@ -21,11 +21,17 @@ cancellation that makes the expanded form (a² + b² − 2a cosθ + cos²θ) rou
 
 :func:`schlick` is Schlick's approximation R0 + (1 − R0)(1 − cosθ)⁵ with the normal-incidence
 reflectance R0 = ((η − 1)² + k²) / ((η + 1)² + k²) of the same η, k (:func:`r0`).
+
+:func:`polarized_reflection` is the Mueller matrix of specular reflection at a facet, for
+Mitsuba's polarized variants: F above is its first element.
 """
 
 from __future__ import annotations
 
 import drjit as dr
+import mitsuba as mi
+
+from .vector import dot
 
 # Floor of denominators that vanish only in degenerate cases (grazing light on η = 1, k = 0):
 # there the numerator vanishes too, and F = 0 is the limit.
@@ -108,3 +114,36 @@ def dielectric(cos_theta_i, eta):
     f = 0.5 * (dr.square(a_s) + dr.square(a_p))
     f = dr.select(eta == 1.0, 0.0, dr.select(cos_i == 0.0, 1.0, f))
     return f, dr.select(outside, -cos_t, cos_t), eta_it, eta_ti
+
+
+def polarized_reflection(wi, wo, m, eta, k, radiance: bool):
+    r"""
+    The Mueller matrix (``mi.Spectrum`` of a polarized variant) of the specular reflection of
+    light at a facet of normal ``m`` with relative index η + ik (per channel), in the Stokes
+    frames Mitsuba attaches to the directions of travel (Mitsuba's ``mueller.h``: a Stokes
+    vector travelling along d has its reference axis ``mueller.stokes_basis(d)``).
+
+    Light arrives along −ω̂o and leaves along ω̂i, where (ω̂o, ω̂i) = (ωo, ωi) in radiance
+    transport and (ωi, ωo) in importance transport. The matrix of reflection at the facet
+    (``mueller.specular_reflection``, per channel at cosθ = ω̂o·m: its s axis is
+    perpendicular to the plane of reflection, m × −ω̂o before and m × ω̂i after) is rotated
+    from those axes into the Stokes bases of −ω̂o and ω̂i; where ω̂o, ω̂i and m are collinear
+    (normal incidence) the plane of reflection is undefined and the x axis stands for it. These
+    are the conventions of ``roughconductor`` (``src/bsdfs/roughconductor.cpp``), whose
+    polarized values the plugin reproduces.
+    """
+    wo_hat, wi_hat = (wo, wi) if radiance else (wi, wo)
+    cos_theta = dot(wo_hat, m)
+    channels = [mi.mueller.specular_reflection(cos_theta, mi.Complex2f(eta[c], k[c]))
+                for c in range(len(eta))]
+    M = mi.Spectrum(0.0)
+    for i in range(4):
+        for j in range(4):
+            M[i, j] = mi.UnpolarizedSpectrum(*(channel[i, j] for channel in channels))
+    s_in, s_out = dr.cross(m, -wo_hat), dr.cross(m, wi_hat)
+    collinear = dr.all(s_in == 0.0)
+    x_axis = mi.Vector3f(1.0, 0.0, 0.0)
+    s_in = dr.select(collinear, x_axis, dr.normalize(s_in))
+    s_out = dr.select(collinear, x_axis, dr.normalize(s_out))
+    return mi.mueller.rotate_mueller_basis(M, -wo_hat, s_in, mi.mueller.stokes_basis(-wo_hat),
+                                           wi_hat, s_out, mi.mueller.stokes_basis(wi_hat))
