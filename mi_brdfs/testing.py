@@ -24,8 +24,8 @@ A BSDF is given as a ``load_dict`` dict, an XML fragment, ``'type key=value'`` o
 from __future__ import annotations
 
 from .checks import (CheckResult, check_albedo_agreement, check_consistency, check_energy,
-                     check_furnace, check_ndf, check_positivity, check_reciprocity,
-                     check_stability, check_weak_furnace, chi2_bsdf)
+                     check_furnace, check_gradients, check_ndf, check_positivity,
+                     check_reciprocity, check_stability, check_weak_furnace, chi2_bsdf)
 
 
 def _assert(result: CheckResult) -> CheckResult:
@@ -67,6 +67,10 @@ assert_positive = _assertion(
 assert_stable = _assertion(
     check_stability, "assert_stable",
     "No NaN/Inf/negative values at stress directions, for one BSDF or a list (a grid).")
+assert_gradients = _assertion(
+    check_gradients, "assert_gradients",
+    "The derivatives by AD of eval, pdf and the sample weights equal finite differences for "
+    "every differentiable parameter (AD variants); a detached pdf or weight is allowed.")
 assert_furnace = _assertion(
     check_furnace, "assert_furnace",
     "The white furnace render is finite and matches the image its albedo curve predicts.")

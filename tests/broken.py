@@ -129,3 +129,81 @@ def register_wrapper(name, inner, sample=None, value=None, pdf_of=None):
 
     mi.register_bsdf(name, Wrapper)
     return {"type": name}
+
+
+GRADIENT_DEFECTS = ("none", "eval_detached", "eval_sign", "pdf_scaled", "weight_detached",
+                    "weight_sign")
+
+
+def register_broken_gradients():
+    """
+    Register ``gradbroken``: ρ cosθo/π (``reflectance``, traversable and differentiable),
+    sampled from the cosine-weighted hemisphere with probability ρ, else uniformly, so that
+    eval, pdf and the weights all depend on ρ; with exactly one defect in a derivative
+    (``defect``, :data:`GRADIENT_DEFECTS`), its values unchanged:
+
+    ``eval_detached`` eval computed from a detached ρ; ``eval_sign`` eval's derivative negated;
+    ``pdf_scaled`` pdf's derivative 1.2 times; ``weight_detached`` the weight detached (as a
+    renderer may, on purpose); ``weight_sign`` the weight's derivative negated.
+    """
+
+    def flip(x):
+        return dr.replace_grad(x, 2.0 * dr.detach(x) - x)  # the same value, −∂x
+
+    class GradBroken(mi.BSDF):
+        def __init__(self, props):
+            super().__init__(props)
+            self.defect = props.get("defect", "none")
+            assert self.defect in GRADIENT_DEFECTS, self.defect
+            self.m_reflectance = props.get_texture("reflectance", 0.5)
+            self.m_flags = int(mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide)
+            self.m_components = [self.m_flags]
+
+        def _rho(self, si, active):
+            return mi.Float(self.m_reflectance.eval_1(si, active))
+
+        def _eval_pdf(self, si, wo, active):
+            ok = active & (si.wi.z > 0) & (wo.z > 0)
+            rho = self._rho(si, ok)
+            f_rho = dr.detach(rho) if self.defect == "eval_detached" else rho
+            value = mi.Spectrum(f_rho * dr.inv_pi * wo.z)
+            if self.defect == "eval_sign":
+                value = flip(value)
+            pdf = rho * wo.z * dr.inv_pi + (1.0 - rho) * dr.inv_two_pi
+            if self.defect == "pdf_scaled":
+                pdf = dr.replace_grad(pdf, 1.2 * pdf)
+            return dr.select(ok, value, 0.0), dr.select(ok, pdf, 0.0)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            bs = dr.zeros(mi.BSDFSample3f)
+            cosine = sample1 < dr.detach(self._rho(si, active))
+            bs.wo = dr.select(cosine, mi.warp.square_to_cosine_hemisphere(sample2),
+                              mi.warp.square_to_uniform_hemisphere(sample2))
+            value, bs.pdf = self._eval_pdf(si, bs.wo, active)
+            bs.eta = 1.0
+            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.DiffuseReflection)
+            ok = active & (bs.pdf > 0)
+            weight = dr.select(ok, value / dr.select(ok, bs.pdf, 1.0), 0.0)
+            if self.defect == "weight_detached":
+                weight = dr.detach(weight)
+            elif self.defect == "weight_sign":
+                weight = flip(weight)
+            return bs, weight
+
+        def eval(self, ctx, si, wo, active=True):
+            return self._eval_pdf(si, wo, active)[0]
+
+        def pdf(self, ctx, si, wo, active=True):
+            return self._eval_pdf(si, wo, active)[1]
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self._eval_pdf(si, wo, active)
+
+        def traverse(self, cb):
+            cb.put("reflectance", self.m_reflectance, mi.ParamFlags.Differentiable)
+
+        def to_string(self):
+            return f"GradBroken[defect={self.defect}]"
+
+    mi.register_bsdf("gradbroken", GradBroken)
+    return "gradbroken"

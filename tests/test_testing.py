@@ -10,7 +10,7 @@ import textwrap
 import mitsuba as mi
 import pytest
 
-from broken import broken, register_broken
+from broken import broken, register_broken, register_broken_gradients
 from mi_brdfs import testing
 
 GOOD = {"type": "lambert", "reflectance": 0.5}
@@ -25,6 +25,7 @@ CASES = {
     "assert_positive": ((GOOD,), (broken("negative"),)),
     "assert_stable": (([GOOD],), ([broken("nan")],)),
     "assert_furnace": ((GOOD,), (broken("eval"),)),  # emitter sampling sees eval()
+    "assert_gradients": ((GOOD,), ({"type": "gradbroken", "defect": "eval_sign"},)),
 }
 #: Small sizes that still tell each pair apart by far: every defect is a factor or a sign
 #: (uniform against cosine sampling, f ∝ cosθi, eval < 0 over half the sphere, NaN at the stress
@@ -37,12 +38,14 @@ SMALL = {"assert_sampling_matches_pdf": {"sample_count": 100_000},
          "assert_positive": {"n": 2_000},
          "assert_stable": {"n_random": 200},
          "assert_furnace": {"spp": 16, "res": 16, "tol": 0.02, "n": 1_000},
-         "assert_consistent": {"n": 2_000}}
+         "assert_consistent": {"n": 2_000},
+         "assert_gradients": {"n": 128}}
 
 
 @pytest.mark.parametrize("name", list(CASES))
 def test01_each_assertion_passes_good_and_fails_broken(variant_llvm_ad_rgb, name):
     register_broken()
+    register_broken_gradients()
     assertion = getattr(testing, name)
     good, bad = CASES[name]
     kwargs = SMALL.get(name, {})

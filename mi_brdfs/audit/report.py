@@ -18,7 +18,8 @@ COLUMNS = (("consistency", "consistency"), ("chi2", "χ² (ours)"),
            ("mitsuba chi2", "χ² (Mitsuba's harness)"), ("energy", "energy"),
            ("albedo", "albedo"), ("lobes", "lobes"), ("pdf integral", "∫ pdf"),
            ("reciprocity", "reciprocity"), ("positivity", "positivity"),
-           ("stability", "stability"), ("sides", "sides"), ("load", "loads"),
+           ("stability", "stability"), ("gradients", "gradients"), ("sides", "sides"),
+           ("load", "loads"),
            ("crash", "crash"))
 
 #: The variant whose audit the report names when it was made in another one.

@@ -89,7 +89,7 @@ def run_case(case: grid.Case, variant: str, quick: bool) -> list[dict]:
         from ..checks.result import CheckResult
         return [_record(case, variant, CheckResult("load", False, math.nan, "n/a",
                                                    f"does not load: {str(e)[:300]}"))]
-    for result in run_battery(bsdf, quick=quick, progress=False):
+    for result in run_battery(bsdf, quick=quick, progress=False, gradients=True):
         records.append(_record(case, variant, result))
     for result in sides.check_sides(bsdf, n=2_000 if quick else 20_000):
         records.append(_record(case, variant, result))

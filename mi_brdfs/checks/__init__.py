@@ -18,6 +18,7 @@ check                      what it establishes
 ``check_positivity``       eval ≥ 0, pdf ≥ 0 everywhere on the sphere
 ``check_stability``        no NaN/Inf/negative at stress directions × parameter extremes
 ``check_furnace``          the white furnace render equals what E(θ) predicts, no NaN pixel
+``check_gradients``        AD derivatives of eval, pdf, weights = finite differences (AD variants)
 ``check_equal``            two BSDFs agree pointwise (eval, pdf, sample): a plugin = a built-in
 ``check_ndf``              ∫ D cosθ dω = 1 (microfacet terms)
 ``check_weak_furnace``     Heitz's weak white furnace = 1 (microfacet D and G1)
@@ -36,6 +37,7 @@ from .albedo import (
 from .battery import format_table, run_battery
 from .consistency import check_consistency
 from .furnace import FurnaceRender, check_furnace, furnace_render
+from .gradients import Gradient, check_gradients, gradient_rows
 from .lobes import check_lobes, check_pdf_integral
 from .microfacet import (
                      check_ndf,
@@ -57,6 +59,7 @@ __all__ = [
     "albedo_curve", "albedo_sampled", "albedo_eval", "albedo_quadrature", "AlbedoCurve",
     "check_reciprocity", "check_positivity", "reciprocity", "check_stability", "parameter_grid",
     "sweep_one", "check_furnace", "furnace_render", "FurnaceRender", "check_ndf",
+    "check_gradients", "gradient_rows", "Gradient",
     "check_weak_furnace", "ndf_normalization", "weak_white_furnace", "mitsuba_terms",
     "package_terms",
     "run_battery", "format_table", "check_equal", "eval_precision", "check_lobes",

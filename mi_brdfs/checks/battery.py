@@ -7,14 +7,17 @@ from __future__ import annotations
 import math
 import time
 
+import drjit as dr
 import mitsuba as mi
 
 from ..bsdfspec import load_bsdf, loaded_once
+from ..errors import MiBrdfsError
 from ..progress import Progress
 from . import batch
 from .albedo import albedo_curve, check_albedo_agreement, check_energy
 from .consistency import check_consistency
 from .furnace import check_furnace
+from .gradients import check_gradients
 from .lobes import check_lobes, check_pdf_integral
 from .reciprocity import check_positivity, check_reciprocity
 from .result import CheckResult
@@ -27,13 +30,15 @@ CHI2_THETAS = (0.0, 45.0, 84.26)
 
 @loaded_once()
 def run_battery(spec, quick: bool = False, render: bool = False, chi2_res: int | None = None,
-                chi2_ires: int | None = None, progress: bool = True) -> list[CheckResult]:
+                chi2_ires: int | None = None, progress: bool = True,
+                gradients: bool = False) -> list[CheckResult]:
     """
     Every check on one BSDF (given as a dict, XML fragment or ``'type key=value'`` string), in
     the current variant: consistency, χ² sampling at normal, 45° and grazing incidence (JIT
     variants), energy conservation and the sample()/eval() albedo agreement, the lobes (context
     selection, additivity, ∫ pdf = the fraction of samples that succeed), reciprocity,
-    positivity, the stability sweep at these parameters, and with ``render`` the furnace render.
+    positivity, the stability sweep at these parameters, with ``render`` the furnace render,
+    and with ``gradients`` the derivatives of every differentiable parameter (AD variants).
     ``quick`` uses 10× fewer samples. χ² chooses its resolution from the lobe's sharpness
     (:func:`~mi_brdfs.checks.sampling.chi2_settings`, at least 8×8 points per cell: with
     Mitsuba's default of 4, roughconductor at α = 0.3 is rejected at cosθ = 0.1 only because the
@@ -75,6 +80,11 @@ def run_battery(spec, quick: bool = False, render: bool = False, chi2_res: int |
               ("reciprocity", lambda: [check_reciprocity(spec, n=n // 5 if jit else n // 10)]),
               ("positivity", lambda: [check_positivity(spec, n=n // 5 if jit else n // 10)]),
               ("stability", lambda: [check_stability(spec)])]
+    if gradients:
+        if not (jit and dr.is_diff_v(mi.Float)):
+            raise MiBrdfsError(f"--gradients needs an AD variant (e.g. llvm_ad_rgb), not "
+                               f"{mi.variant()}")
+        steps.append(("gradients", lambda: [check_gradients(spec, n=128 if quick else 512)]))
     if render:
         steps.append(("furnace", lambda: [check_furnace(spec, spp=32 if quick else 128,
                                                         res=32 if quick else 64)]))

@@ -53,7 +53,7 @@ def cmd_check(args) -> int:
     failed, report = 0, []
     for spec in specs:
         results = run_battery(spec, quick=args.quick, render=args.render,
-                              progress=not args.quiet)
+                              progress=not args.quiet, gradients=args.gradients)
         failed += sum(not r.passed for r in results)
         print(f"\n{describe(spec)} ({variant})")
         print(format_table(results, messages=not args.quiet))

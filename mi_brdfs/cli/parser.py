@@ -144,9 +144,12 @@ def _add_check(sub) -> None:
     c = _bsdf_command(sub, "check", "run every check on one or more BSDFs",
                       "Run the whole battery (consistency, χ² sampling, energy, albedo "
                       "agreement, reciprocity, positivity, stability; optionally the furnace "
-                      "render) and print a table. Exit status 1 when a check fails.")
+                      "render and the gradients) and print a table. Exit status 1 when a check fails.")
     c.add_argument("--quick", action="store_true", help="10× fewer samples")
     c.add_argument("--render", action="store_true", help="also render the white furnace")
+    c.add_argument("--gradients", action="store_true",
+                   help="also check the derivatives of every differentiable parameter against "
+                        "finite differences (AD variants)")
     c.add_argument("--json", metavar="FILE", type=_output(".json"),
                    help="also write the results as JSON")
     c.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no messages")

@@ -478,8 +478,7 @@ class CookTorrance(mi.BSDF):
         alpha = multiscatter.uniform_alpha(self.m_alpha_u, self.m_alpha_v) \
             if self.m_multiscatter else None
         if self.m_transmission:
-            tables = multiscatter.dielectric_tables(
-                self.m_distribution, float(dr.slice(self.m_eta)), alpha) \
+            tables = multiscatter.dielectric_tables(self.m_distribution, self.m_eta, alpha) \
                 if self.m_multiscatter else None
             single = MicrofacetInterface(
                 self.m_distribution, self.m_alpha_u, self.m_alpha_v, self.m_sample_visible,

@@ -197,10 +197,9 @@ class Mixture:
         return [lobe for lobe in self.lobes if lobe.enabled(ctx)]
 
     def probabilities(self, ctx, si, lobes, active) -> list:
-        """Each lobe's probability of being sampled: its weight over their sum, detached (a
-        choice of strategy, not part of the model: as Mitsuba's sampling weights)."""
-        return mixture.probabilities([dr.detach(lobe.weight(ctx, si, active))
-                                      for lobe in lobes])
+        """Each lobe's probability of being sampled: its weight over their sum. Not detached:
+        the pdf is the density sample() realises, and so is its derivative."""
+        return mixture.probabilities([lobe.weight(ctx, si, active) for lobe in lobes])
 
     def eval_pdf(self, ctx, si, wo, active=True, probabilities=None):
         """(f·|cosθo|, pdf of :meth:`sample`) at ``wo``: the enabled lobes' sum, and the

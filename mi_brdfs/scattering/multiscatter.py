@@ -84,12 +84,43 @@ def conductor_table(kind: str, shadowing: str, alpha=None) -> "AlbedoTable":
     return AlbedoTable(tables["E"][key], tables["E_avg"][key], tables["alpha_max"], alpha)
 
 
-def dielectric_tables(kind: str, eta: float, alpha=None) -> tuple["AlbedoTable", ...]:
-    """The :class:`AlbedoTable` pair of :func:`dielectric_arrays` (lit from above, from
-    below), at the uniform roughness ``alpha`` (None: any roughness)."""
+def dielectric_tables(kind: str, eta, alpha=None) -> tuple["AlbedoTable", ...]:
+    """
+    The :class:`AlbedoTable` pair of :func:`dielectric_arrays` (lit from above, from below),
+    at the uniform roughness ``alpha`` (None: any roughness). ``eta``: a number, or a Float
+    whose derivative, where AD tracks it, flows into the tables through the slope of their
+    interpolation in η (:func:`dielectric_slopes`: the tables are linear in η within a cell).
+    """
+    value = float(np.asarray(eta, np.float64).ravel()[0])
+    offset = eta - dr.detach(eta) if dr.is_diff_v(mi.Float) and dr.grad_enabled(eta) else None
     alpha_max = load_tables()["alpha_max"]
-    return tuple(AlbedoTable(E, E_avg, alpha_max, alpha)
-                 for E, E_avg in dielectric_arrays(kind, eta))
+    return tuple(AlbedoTable(E, E_avg, alpha_max, alpha,
+                             None if offset is None else (*slope, offset))
+                 for (E, E_avg), slope in zip(dielectric_arrays(kind, value),
+                                              dielectric_slopes(kind, value)))
+
+
+def _eta_cell(relative: float, n: int, eta_max: float):
+    """(node below, fraction to the next, d(position)/d(relative) or 0 beyond the table) of a
+    relative index on the n nodes uniform in log η over [1/η_max, η_max]."""
+    x = (np.log(relative) / np.log(eta_max) + 1.0) / 2.0
+    s = np.clip(x, 0.0, 1.0) * (n - 1)
+    j = min(int(s), n - 2)
+    inside = 0.0 < x < 1.0
+    return j, s - j, ((n - 1) / (2.0 * np.log(eta_max) * relative) if inside else 0.0)
+
+
+def dielectric_slopes(kind: str, eta: float) -> tuple[tuple, tuple]:
+    """d/dη of :func:`dielectric_arrays`' (E, E_avg) lit from above and from below (at 1/η:
+    the chain rule's −1/η²), as NumPy arrays: constant within a cell of the η nodes."""
+    tables = load_tables()
+    key, eta_max = table_key(kind, "smith"), tables["eta_max"]
+    E, E_avg = tables["ET"][key], tables["ET_avg"][key]
+    out = []
+    for relative, chain in ((eta, 1.0), (1.0 / eta, -1.0 / (eta * eta))):
+        j, _, ds = _eta_cell(relative, len(E), eta_max)
+        out.append(((E[j + 1] - E[j]) * ds * chain, (E_avg[j + 1] - E_avg[j]) * ds * chain))
+    return tuple(out)
 
 
 def dielectric_arrays(kind: str, eta: float) -> tuple[tuple, tuple]:
@@ -105,10 +136,7 @@ def dielectric_arrays(kind: str, eta: float) -> tuple[tuple, tuple]:
     E, E_avg = tables["ET"][key], tables["ET_avg"][key]
 
     def at(relative):
-        s = np.clip((np.log(relative) / np.log(eta_max) + 1.0) / 2.0, 0.0, 1.0) * \
-            (len(E) - 1)
-        j = min(int(s), len(E) - 2)
-        t = s - j
+        j, t, _ = _eta_cell(relative, len(E), eta_max)
         return ((1.0 - t) * E[j] + t * E[j + 1], (1.0 - t) * E_avg[j] + t * E_avg[j + 1])
 
     return at(eta), at(1.0 / eta)
@@ -155,6 +183,12 @@ def _node_pairs(E):
     return np.stack((E[..., :-1], E[..., 1:]), axis=-1).ravel()
 
 
+def _upload(values):
+    """A float64 NumPy table in the variant's form: a ``mi.Float`` in JIT variants (float32),
+    the array itself in scalar ones."""
+    return mi.Float(values.astype(np.float32)) if dr.is_jit_v(mi.Float) else values
+
+
 def _cell(t, n):
     """(index of the node below, fraction to the next) of t ∈ [0, 1] on n uniform nodes."""
     s = dr.clip(t, 0.0, 1.0) * (n - 1)
@@ -169,16 +203,19 @@ class AlbedoTable:
     (the arrays are built with the lobe, so each variant gets its own types). With ``alpha``,
     a uniform roughness (a float or a width-1 Float), the table is interpolated in α once,
     here, so that a lookup reads one pair of values, not two; gradients through ``alpha``
-    still flow into that row.
+    still flow into that row. ``slope`` = (dE, dE_avg, Δ): the tables' derivatives in a
+    parameter and Δ, a Float of value 0 whose derivative is the parameter's (AD variants).
     """
 
-    def __init__(self, E, E_avg, alpha_max: float, alpha=None):
+    def __init__(self, E, E_avg, alpha_max: float, alpha=None, slope=None):
         E, E_avg = np.asarray(E, np.float64), np.asarray(E_avg, np.float64)
         self.n_alpha, self.n_mu = E.shape
         self.alpha_max = alpha_max
-        jit = dr.is_jit_v(mi.Float)
-        self._E = mi.Float(_node_pairs(E).astype(np.float32)) if jit else _node_pairs(E)
-        self._E_avg = mi.Float(E_avg.astype(np.float32)) if jit else E_avg
+        self._E, self._E_avg = _upload(_node_pairs(E)), _upload(E_avg)
+        if slope is not None:  # (dE, dE_avg, Δ): a value 0 whose derivative AD tracks
+            dE, dE_avg, delta = slope
+            self._E = self._E + delta * _upload(_node_pairs(np.asarray(dE, np.float64)))
+            self._E_avg = self._E_avg + delta * _upload(np.asarray(dE_avg, np.float64))
         #: E(μ) on the μ nodes (pairs, as _node_pairs) and E_avg at ``alpha``, or None
         self.row = self.row_average = None
         if alpha is not None:

@@ -10,6 +10,9 @@ horizon and (b) NaN at ``cos θi = 0``. Reproducer:
 ``validation/audit/impact_roughplastic_pdf_mask.py``. Issue text:
 ``validation/audit/upstream/roughplastic_pdf_mask.md``.
 
+Its gradients in ``alpha`` and ``eta`` miss the diffuse term's part: the tables of that term
+are built from scalars taken from both (``validation/audit/repro_roughplastic_gradients.py``).
+
 ``plastic``: its only failures are Mitsuba's χ² harness on the default and nonlinear
 configurations. They come from the Dirac lobe and are triaged elsewhere, so there is no entry
 here. The harness's "PDF sum" equals the probability that the smooth lobe is selected (the
@@ -91,4 +94,24 @@ FINDINGS = [
             "the contract allows. The same fix removes the NaN. The reproducer's part [C] "
             "exits 1 on it."),
         reproducer=_REPRO, source=_SOURCE, issue=_ISSUE),
+    Finding(
+        bsdf="roughplastic", check=r"gradients", configs="", verdict="defect",
+        summary=(
+            "The derivatives in alpha and eta, both marked differentiable by traverse(), miss "
+            "the diffuse term's dependence on them in every configuration: eval, pdf and the "
+            "sample weights disagree with central differences by 2 to 600 times the check's "
+            "tolerance (pdf in eta reads as detached). parameters_changed() builds the diffuse "
+            "term's Fresnel transmittance tables, m_external_transmittance and "
+            "m_internal_reflectance, from dr::slice(m_eta) and dr::slice(m_alpha): scalars "
+            "without a derivative. The reproducer gives, for GGX alpha=0.5 at one pair where "
+            "the diffuse term dominates, d eval/d alpha -0.0117 by AD against -0.0684 by "
+            "differences, d eval/d eta -0.0461 against -0.0250. Not a check limitation: the "
+            "same check passes on roughconductor, roughdielectric, plastic and principled, "
+            "and on the package's plugins with their own tables (cooktorrance's compensation, "
+            "whose table lookups carry their slope in eta)."),
+        reproducer="validation/audit/repro_roughplastic_gradients.py",
+        source=("src/bsdfs/roughplastic.cpp (v3.9.1): traverse lines 210-211 mark alpha and "
+                "eta differentiable; parameters_changed line 235 takes dr::slice of both for "
+                "the tables gathered at lines 275, 354-356 and 396"),
+        issue="validation/audit/upstream/roughplastic_gradients.md"),
 ]
