@@ -78,6 +78,11 @@ def texture_range(tex) -> tuple[float, float] | None:
     params = mi.traverse(tex)
     if "data" in params:
         data = np.asarray(params["data"])
+        if _spectral_coefficients(tex, data):
+            # the coefficients of Mitsuba's RGB-to-spectrum model (Jakob & Hanika 2019, "A
+            # Low-Dimensional Function Space for Efficient Spectral Upsampling"): a sigmoid,
+            # so every texel's reflectance lies within (0, 1) at every wavelength
+            return (0.0, 1.0)
         if np.issubdtype(data.dtype, np.integer):
             # 8/16-bit storage: normalised values (sRGB-decoded at lookup), within [0, 1] by design
             scale = float(np.iinfo(data.dtype).max)
@@ -89,6 +94,14 @@ def texture_range(tex) -> tuple[float, float] | None:
                 return (math.nan, math.nan)
             return (float(data.min()), float(data.max()))
     return None
+
+
+def _spectral_coefficients(tex, data) -> bool:
+    """Whether a bitmap's stored data are spectral upsampling coefficients, not values: in
+    spectral variants, a bitmap of three channels that is not ``raw`` (as Mitsuba's
+    ``bitmap`` decides it)."""
+    return mi.is_spectral and data.ndim == 3 and data.shape[-1] == 3 and \
+        "raw = 0" in str(tex)
 
 
 def clip(x, lo: float, hi: float):

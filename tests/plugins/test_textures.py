@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import mi_brdfs
+from conftest import set_variant
 
 
 def checker(value, other=0.2):
@@ -115,3 +116,40 @@ def test05_a_mesh_attribute_weighs_the_lobes_where_it_is_evaluated(variants_rgb,
     clipped = mi.load_dict({"type": plugin, param: {"type": "rgb", "value": [1.0, 0.3, 0.7]}})
     np.testing.assert_allclose(value, np.ravel(np.array(clipped.eval(ctx, si, bs.wo))),
                                rtol=1e-5)
+
+
+#: Every reflectance parameter of every plugin
+REFLECTANCES = [("lambert", "reflectance"), ("orennayar", "reflectance"),
+                ("phong", "diffuse_reflectance"), ("phong", "specular_reflectance"),
+                ("ward", "diffuse_reflectance"), ("ward", "specular_reflectance"),
+                ("ashikhmin", "diffuse_reflectance"), ("ashikhmin", "specular_reflectance"),
+                ("lafortune", "diffuse_reflectance"), ("lafortune", "specular_reflectance_0"),
+                ("cooktorrance", "specular_reflectance"), ("cooktorrance", "diffuse_reflectance")]
+
+
+@pytest.mark.parametrize("variant", ["scalar_spectral", "llvm_ad_spectral"])
+def test06_spectral_variants_take_a_bitmap_reflectance(variant, tmp_path):
+    """A 20 % grey bitmap as every reflectance, in spectral variants, where Mitsuba stores its
+    texels as spectral upsampling coefficients (values like −0.75, which are no reflectance):
+    each plugin loads it, as diffuse does, and a lambert of it evaluates as diffuse of it; a
+    raw bitmap's values are still checked."""
+    set_variant(variant)
+    path = str(tmp_path / "grey.exr")
+    mi.Bitmap(np.full((4, 4, 3), 0.2, np.float32)).write(path)
+    texture = {"type": "bitmap", "filename": path}
+    for plugin, param in REFLECTANCES:
+        assert mi.load_dict({"type": plugin, param: texture}) is not None, (plugin, param)
+    si = mi.SurfaceInteraction3f()
+    si.wi, si.uv = mi.Vector3f(0, 0, 1), mi.Point2f(0.5, 0.5)
+    si.wavelengths = mi.UnpolarizedSpectrum([450, 520, 600, 680])
+    wo = mi.Vector3f(0.3, 0.0, 0.954)
+    ours = mi.load_dict({"type": "lambert", "reflectance": texture})
+    theirs = mi.load_dict({"type": "diffuse", "reflectance": texture})
+    np.testing.assert_allclose(np.ravel(np.array(ours.eval(mi.BSDFContext(), si, wo))),
+                               np.ravel(np.array(theirs.eval(mi.BSDFContext(), si, wo))),
+                               rtol=1e-6)
+    bright = str(tmp_path / "bright.exr")
+    mi.Bitmap(np.full((4, 4, 1), 1.7, np.float32)).write(bright)
+    with pytest.raises(RuntimeError, match=r"texture with values in \[1.7, 1.7\]"):
+        mi.load_dict({"type": "lambert", "reflectance": {"type": "bitmap", "filename": bright,
+                                                          "raw": True}})
