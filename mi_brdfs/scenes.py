@@ -48,6 +48,8 @@ def parse_defines(items: list[str] | None) -> dict[str, str]:
         name, sep, value = item.partition("=")
         if not sep or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name.strip()):
             raise MiBrdfsError(f"-D expects name=value (e.g. -D spp=64), got '{item}'")
+        if not value.strip():  # Mitsuba would read an empty number as 0, silently
+            raise MiBrdfsError(f"-D {item} has no value (give name=value, e.g. -D spp=64)")
         defines[name.strip()] = value.strip()
     return defines
 

@@ -64,7 +64,7 @@ def cmd_check(args) -> int:
         from ..imageio import atomic_path
         with atomic_path(json_path, ".json") as tmp:
             with open(tmp, "w") as f:
-                json.dump(report, f, indent=1, default=float)
+                json.dump(_strict_json(report), f, indent=1, allow_nan=False)
     print(f"\n{failed} check(s) failed" if failed else "\nall checks passed")
     return 1 if failed else 0
 
@@ -284,18 +284,49 @@ def section_name(section) -> str:
     return section.__module__.rsplit(".", 1)[-1]
 
 
+def _strict_json(value):
+    """``value`` for strict JSON: numbers as floats, NaN and infinities (a check without a
+    value, a tolerance of inf) as the strings "nan", "inf", "-inf", which JSON has no token
+    for."""
+    import math
+
+    if isinstance(value, dict):
+        return {str(k): _strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_strict_json(v) for v in value]
+    if isinstance(value, (str, bool)) or value is None:
+        return value
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return str(value)
+    return number if math.isfinite(number) else str(number)
+
+
+def _only_names(value: str) -> list[str]:
+    """The names of ``--only``, comma-separated; none at all (``--only ''``, ``--only ,``) is
+    an error, not a run of everything or of nothing."""
+    from ..errors import MiBrdfsError
+
+    names = [n.strip() for n in value.split(",") if n.strip()]
+    if not names:
+        raise MiBrdfsError(f"--only {value!r} names nothing: give one or more names, "
+                           f"comma-separated (or leave --only out to run everything)")
+    return names
+
+
 def _only_sections(args, sections, kwargs) -> list:
     """The sections ``--only`` names (all without it), in the report's order; the command line
     in ``kwargs`` says which. An unknown name, or ``--only`` with ``--readme`` (a partial run
     cannot fill every quoted figure), is one error."""
     from ..errors import MiBrdfsError
 
-    if not getattr(args, "only", None):
+    if getattr(args, "only", None) is None:
         return sections
-    names = [n.strip() for n in args.only.split(",") if n.strip()]
+    names = _only_names(args.only)
     known = [section_name(s) for s in sections]
     unknown = [n for n in names if n not in known]
-    if unknown or not names:
+    if unknown:
         raise MiBrdfsError(f"--only {args.only}: no section {', '.join(unknown) or 'named'} "
                            f"(sections: {', '.join(known)})")
     if getattr(args, "readme", None):
@@ -321,14 +352,19 @@ def cmd_audit(args) -> int:
     cases = grid.all_cases()
     if args.quick:
         cases = [c for c in cases if c.quick]
-    if args.only:
-        names = {n.strip() for n in args.only.split(",") if n.strip()}
+    if args.only is not None:
+        names = set(_only_names(args.only))
         unknown = names - {c.bsdf for c in grid.all_cases()}
         if unknown:
             raise MiBrdfsError(f"--only {args.only}: no audit configuration for "
                                f"{', '.join(sorted(unknown))} (the audit knows: "
                                f"{', '.join(sorted({c.bsdf for c in grid.all_cases()}))})")
         cases = [c for c in cases if c.bsdf in names]
+        if not cases:  # before anything is written: the report stays as it was
+            raise MiBrdfsError(f"--only {args.only} --quick: none of these is in the quick "
+                               f"audit (its BSDFs: "
+                               f"{', '.join(sorted({c.bsdf for c in grid.all_cases() if c.quick}))}"
+                               f"); leave --quick out")
     t0 = time.perf_counter()
     records = run.run(cases, args.variant, args.quick, out / "audit" / ".cache",
                       processes=args.processes or min(os.cpu_count() or 1, 4),

@@ -32,8 +32,22 @@ def test02_check_fails_with_status_1(variant_llvm_ad_rgb, capsys, tmp_path):
                  str(report)]) == 1
     out = capsys.readouterr().out
     assert "energy" in out and "FAIL" in out and "check(s) failed" in out
-    results = {r["name"]: r["passed"] for r in json.loads(report.read_text())[0]["checks"]}
+    # strict JSON: no NaN or Infinity token (a check without a value reports NaN)
+    text = report.read_text()
+    results = {r["name"]: r["passed"] for r in json.loads(
+        text, parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))[0]["checks"]}
     assert not results["energy"] and results["consistency"]
+
+
+def test02b_the_json_is_strict(tmp_path):
+    """A check without a value (χ² skipped in a scalar variant: NaN) is written as "nan",
+    so the file parses as strict JSON."""
+    report = tmp_path / "check.json"
+    assert main(["check", "lambert", "--quick", "-q", "--variant", "scalar_rgb", "--json",
+                 str(report)]) == 0
+    checks = json.loads(report.read_text(),
+                        parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))[0]["checks"]
+    assert {c["name"]: c["value"] for c in checks}["chi2"] == "nan"
 
 
 BAD = {

@@ -59,6 +59,14 @@ BAD = [
     (["check", "lambert", "form=x"], "unreferenced property in"),
     (["check", "phong", "lobe=sideways"], 'phong: parameter "lobe" = "sideways" is invalid'),
     (["nosuchcommand"], "invalid choice: 'nosuchcommand'"),
+    # --only that names nothing, or nothing the run has: no run of everything or of nothing
+    (["audit", "--out", ".", "--quick", "--only", "ashikhmin,lafortune"],
+     "--only ashikhmin,lafortune --quick: none of these is in the quick audit"),
+    (["audit", "--out", ".", "--only", ","], "--only ',' names nothing"),
+    (["audit", "--out", ".", "--only", ""], "--only '' names nothing"),
+    (["validate", "--out", ".", "--only", ""], "--only '' names nothing"),
+    (["bench", "--out", ".", "--only", ""], "--only '' names nothing"),
+    (["render", "width.xml", "--spp", "1", "-D", "res="], "-D res= has no value"),
 ]
 
 
