@@ -54,6 +54,27 @@ def parse_defines(items: list[str] | None) -> dict[str, str]:
     return defines
 
 
+def scene_text(path: Path) -> str:
+    """
+    The text of a scene file, read as UTF-8 (Mitsuba's XML; not the locale's encoding), with
+    one line for a file that is not UTF-8 text or whose root element is not ``<scene>`` (a
+    ``<bsdf>`` belongs to ``check``, ``furnace`` or ``plot``, a ``<shape>`` in a scene).
+    """
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise MiBrdfsError(f"{path.name} is not UTF-8 text (byte {e.start}: {e.reason}); "
+                           f"Mitsuba's scene files are UTF-8") from None
+    root = re.search(r"<\s*([A-Za-z_][\w.-]*)", re.sub(r"<\?.*?\?>|<!--.*?-->", "", text,
+                                                     flags=re.S))
+    if root is not None and root.group(1) != "scene":
+        hint = (" (check, furnace and plot take a BSDF file)" if root.group(1) == "bsdf"
+                else "")
+        raise MiBrdfsError(f"{path.name} holds a <{root.group(1)}>, not a <scene>: a scene "
+                           f"file's root element is <scene version=\"3.0.0\">{hint}")
+    return text
+
+
 def load_scene(path: str | os.PathLike, defines: dict | None = None, bsdfs: dict | None = None,
                **kwargs):
     """
@@ -70,11 +91,11 @@ def load_scene(path: str | os.PathLike, defines: dict | None = None, bsdfs: dict
     path = scene_path(path)
     params = dict(defines or {})
     params.update({k: str(v) for k, v in kwargs.items()})
-    text = path.read_text()
+    text = scene_text(path)
     _check_film(path.name, text, params)
     try:
         if not bsdfs:
-            scene = mi.load_file(str(path), **params)
+            scene = mi.load_file(str(path), **params)  # (relative paths: the file's folder)
         else:
             xml = swap_bsdfs(text, bsdfs)
             # relative paths in the scene (textures, meshes) resolve against its folder, as in

@@ -151,7 +151,7 @@ def _read(scene, output, report, defines) -> tuple:
     notes on the materials of included files) of the scene, each checked before any work.
     """
     from ..imageio import check_writable
-    from ..scenes import scene_path
+    from ..scenes import scene_path, scene_text
 
     if not isinstance(scene, (str, os.PathLike)):
         raise ParameterError("simplify", "scene", scene, "must be a scene file or the name of "
@@ -160,6 +160,7 @@ def _read(scene, output, report, defines) -> tuple:
         raise ParameterError("simplify", "defines", defines, "must be a dict {name: value} of "
                              "the scene's <default>s")
     path = scene_path(scene)
+    scene_text(path)  # a file that is no UTF-8 <scene> is one line, before any work
     data = path.read_bytes()
     if output is not None and Path(output).suffix.lower() != ".xml":
         raise ParameterError("simplify", "output", str(output),

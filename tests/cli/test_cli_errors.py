@@ -10,6 +10,9 @@ from helpers import cli_one_line_error
 from mi_brdfs.cli import main
 
 SCENES = {
+    "bsdf.xml": '<bsdf version="3.0.0" type="diffuse"/>',
+    "noversion.xml": '<?xml version="1.0"?>\n<!-- a material -->\n<bsdf type="diffuse"/>',
+    "shape.xml": '<shape version="3.0.0" type="sphere"/>',
     "noint.xml": """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm">
         <integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
         <emitter type="constant"/><shape type="sphere"/></scene>""",
@@ -59,6 +62,11 @@ BAD = [
     (["check", "lambert", "form=x"], "unreferenced property in"),
     (["check", "phong", "lobe=sideways"], 'phong: parameter "lobe" = "sideways" is invalid'),
     (["nosuchcommand"], "invalid choice: 'nosuchcommand'"),
+    # a file whose root is not <scene>, wherever a scene is taken
+    (["render", "bsdf.xml", "--spp", "1"], "bsdf.xml holds a <bsdf>, not a <scene>"),
+    (["render", "noversion.xml", "--spp", "1"], "noversion.xml holds a <bsdf>, not a <scene>"),
+    (["compare", "shape.xml", "--swap", "a=diffuse"], "shape.xml holds a <shape>, not a <scene>"),
+    (["simplify", "bsdf.xml", "--quick"], "bsdf.xml holds a <bsdf>, not a <scene>"),
     # --only that names nothing, or nothing the run has: no run of everything or of nothing
     (["audit", "--out", ".", "--quick", "--only", "ashikhmin,lafortune"],
      "--only ashikhmin,lafortune --quick: none of these is in the quick audit"),
@@ -102,3 +110,21 @@ def test03_cuda_variant_without_a_device(tmp_path, monkeypatch, command):
                               "none")
     assert "usable here: scalar_rgb" in line and "jit_init" not in line and "cuda_" not in \
         line.split("usable here:")[1], line
+
+
+def test04_a_file_that_is_not_utf8_is_one_line(tmp_path, monkeypatch):
+    """A scene file in another encoding (here UTF-16 with its byte-order mark) is one line,
+    read as UTF-8 whatever the locale, in the CLI and from Python."""
+    from mi_brdfs.errors import MiBrdfsError
+    from mi_brdfs.scenes import load_scene
+
+    path = tmp_path / "latin.xml"
+    path.write_bytes('<scene version="3.0.0"/>'.encode("utf-16"))
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
+    cli_one_line_error(["render", "latin.xml", "--spp", "1"], "latin.xml is not UTF-8 text")
+    with pytest.raises(MiBrdfsError, match="latin.xml is not UTF-8 text"):
+        load_scene(path)
+    (tmp_path / "bsdf.xml").write_text(SCENES["bsdf.xml"])
+    with pytest.raises(MiBrdfsError, match="bsdf.xml holds a <bsdf>, not a <scene>"):
+        load_scene(tmp_path / "bsdf.xml")
