@@ -6,14 +6,13 @@ Fresnel, visible-normal sampling and the paper's diffuse base.
 
 from __future__ import annotations
 
-import math
-
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ..errors import ParameterError
 from ..scattering import microfacet, multiscatter
+from ..scattering.fresnel import IOR_MAX
 from . import lobes, properties
 from .cooktorrance_conductor import Compensation, MicrofacetReflection
 from .cooktorrance_dielectric import InterfaceCompensation, MicrofacetInterface
@@ -111,6 +110,10 @@ def _read_dielectric(props) -> float:
         raise ParameterError(PLUGIN, where, props[where] if where in props else eta,
                              "must make the relative index int_ior/ext_ior differ from 1 (an "
                              "index-matched interface does not scatter)")
+    if not 1.0 / IOR_MAX <= eta <= IOR_MAX:
+        raise ParameterError(PLUGIN, where, props[where] if where in props else eta,
+                             f"must make the relative index int_ior/ext_ior lie within "
+                             f"[{1.0 / IOR_MAX:g}, {IOR_MAX:g}]")
     return eta
 
 
@@ -118,8 +121,8 @@ def _dielectric_eta(props) -> float:
     """``eta`` with transmission: a number, or a uniform ``<spectrum>`` (one value: refraction
     bends every wavelength alike in this model, so a dispersive η is refused)."""
     if props.type("eta") != mi.Properties.Type.Spectrum:
-        return properties.number(props, PLUGIN, "eta", 1.5, lo=0.0, lo_open=True)
-    tex = properties.texture(props, PLUGIN, "eta", 1.5, lo=0.0, hi=math.inf, lo_open=True)
+        return properties.number(props, PLUGIN, "eta", 1.5, lo=0.0, hi=IOR_MAX, lo_open=True)
+    tex = properties.texture(props, PLUGIN, "eta", 1.5, lo=0.0, hi=IOR_MAX, lo_open=True)
     rng = properties.texture_range(tex)
     if rng is None or rng[0] != rng[1]:
         raise ParameterError(PLUGIN, "eta", props["eta"],
@@ -140,8 +143,8 @@ def _read_ior(props, needed: bool):
         if not needed:
             return None, None, None
         return (*material_ior(DEFAULT_MATERIAL, PLUGIN), DEFAULT_MATERIAL)
-    eta = properties.texture(props, PLUGIN, "eta", 1.5, lo=0.0, hi=math.inf)
-    k = properties.texture(props, PLUGIN, "k", 0.0, lo=0.0, hi=math.inf)
+    eta = properties.texture(props, PLUGIN, "eta", 1.5, lo=0.0, hi=IOR_MAX)
+    k = properties.texture(props, PLUGIN, "k", 0.0, lo=0.0, hi=IOR_MAX)
     eta_c = _constant_channels(props, "eta")
     k_c = _constant_channels(props, "k") if "k" in props else [0.0]
     if eta_c is not None and k_c is not None:
@@ -199,8 +202,9 @@ class CookTorrance(mi.BSDF):
 
      * - eta, k
        - |spectrum| or |texture|
-       - Relative index of refraction η + ik, finite, η ≥ 0, k ≥ 0; k = 0 is a dielectric
-         (η > 0 then), η = 0 with k = 1 a perfect mirror. ``k`` needs ``eta`` and defaults to
+       - Relative index of refraction η + ik, each within [0, 10⁶] (float32 overflows in
+         the Fresnel terms beyond about 10⁹); k = 0 is a dielectric (η > 0 then), η = 0
+         with k = 1 a perfect mirror. ``k`` needs ``eta`` and defaults to
          0 with it (``roughconductor``: 1). With ``transmission``, η is one number (a float
          or a uniform spectrum) (Default: from ``material``)
        - |exposed|, |differentiable|, |discontinuous|
@@ -398,6 +402,8 @@ class CookTorrance(mi.BSDF):
         self.m_sample_visible = properties.boolean(props, PLUGIN, "sample_visible", True)
         #: Kulla & Conty's energy compensation.
         self.m_multiscatter = properties.boolean(props, PLUGIN, "multiscatter", False)
+        if self.m_multiscatter:
+            self._warn_beyond_tables()
         if self.m_multiscatter and self.m_anisotropic:
             properties.warn(PLUGIN, "multiscatter with alpha_u, alpha_v: the albedo tables are "
                                     "isotropic, read at sqrt(alpha_u*alpha_v), so the white "
@@ -412,6 +418,17 @@ class CookTorrance(mi.BSDF):
             self._read_reflection(props)
         self.parameters_changed()
         self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
+
+    def _warn_beyond_tables(self):
+        """Where α can be known at load and exceeds the albedo tables' last node, say so: the
+        table's end is read there, and the compensation falls short."""
+        alpha_max = multiscatter.load_tables()["alpha_max"]
+        for tex in {id(t): t for t in (self.m_alpha_u, self.m_alpha_v)}.values():
+            rng = properties.texture_range(tex)
+            if rng is not None and rng[1] > alpha_max:
+                properties.warn(PLUGIN, f"multiscatter with alpha = {rng[1]:g}: the albedo "
+                                        f"tables end at alpha = {alpha_max:g} and are read "
+                                        f"there, so the white furnace falls below 1")
 
     def _read_transmission(self, props):
         """The dielectric's index and the factor on its refraction lobe."""
@@ -478,11 +495,13 @@ class CookTorrance(mi.BSDF):
         alpha = multiscatter.uniform_alpha(self.m_alpha_u, self.m_alpha_v) \
             if self.m_multiscatter else None
         if self.m_transmission:
-            tables = multiscatter.dielectric_tables(self.m_distribution, self.m_eta, alpha) \
+            # an index set through mi.traverse is not checked: clipped into the accepted range
+            eta = properties.clip(self.m_eta, 1.0 / IOR_MAX, IOR_MAX)
+            tables = multiscatter.dielectric_tables(self.m_distribution, eta, alpha) \
                 if self.m_multiscatter else None
             single = MicrofacetInterface(
                 self.m_distribution, self.m_alpha_u, self.m_alpha_v, self.m_sample_visible,
-                self.m_eta, self.m_specular_reflectance, self.m_specular_transmittance,
+                eta, self.m_specular_reflectance, self.m_specular_transmittance,
                 (REFLECTION_FLAGS | aniso, TRANSMISSION_FLAGS | aniso), tables)
             compensation = None if tables is None else InterfaceCompensation(single)
         else:

@@ -144,8 +144,8 @@ class MicrofacetReflection(lobes.Lobe):
         return self.f_avg if self.f_avg is not None else self._fresnel_average(si, active)
 
     def _fresnel_average(self, si, active):
-        eta = properties.clip_at(self.eta, si, active, 0.0, dr.inf)
-        k = properties.clip_at(self.k, si, active, 0.0, dr.inf)
+        eta = properties.clip_at(self.eta, si, active, 0.0, fresnel.IOR_MAX)
+        k = properties.clip_at(self.k, si, active, 0.0, fresnel.IOR_MAX)
         if self.fresnel == "exact":
             return multiscatter.fresnel_average(eta, k)
         return multiscatter.schlick_average(fresnel.r0(eta, k))
@@ -157,8 +157,8 @@ class MicrofacetReflection(lobes.Lobe):
         if not (mi.is_polarized and self.fresnel == "exact"):
             return self._ks_f(si, t.cos_im, factor, active)
         F = fresnel.polarized_reflection(
-            si.wi, wo, t.m, properties.clip_at(self.eta, si, active, 0.0, dr.inf),
-            properties.clip_at(self.k, si, active, 0.0, dr.inf),
+            si.wi, wo, t.m, properties.clip_at(self.eta, si, active, 0.0, fresnel.IOR_MAX),
+            properties.clip_at(self.k, si, active, 0.0, fresnel.IOR_MAX),
             ctx.mode == mi.TransportMode.Radiance)
         # F scaled per channel: the product with the diagonal matrix of ks·factor
         scale = mi.UnpolarizedSpectrum(properties.clip_at(self.specular, si, active) * factor)
@@ -169,8 +169,8 @@ class MicrofacetReflection(lobes.Lobe):
         value = properties.clip_at(self.specular, si, active) * factor
         if self.fresnel_term is not None:
             value = value * self.fresnel_term(
-                cos_theta, properties.clip_at(self.eta, si, active, 0.0, dr.inf),
-                properties.clip_at(self.k, si, active, 0.0, dr.inf))
+                cos_theta, properties.clip_at(self.eta, si, active, 0.0, fresnel.IOR_MAX),
+                properties.clip_at(self.k, si, active, 0.0, fresnel.IOR_MAX))
         return value
 
 

@@ -33,6 +33,11 @@ import mitsuba as mi
 
 from .vector import dot
 
+#: Largest η and k the terms take (and the widest ratio of two indices): beyond about 1e9 the
+#: squares in them leave float32's range (η⁴ > 3.4e38) and F is NaN; no material comes near
+#: (metals' η and k stay below 100).
+IOR_MAX = 1e6
+
 # Floor of denominators that vanish only in degenerate cases (grazing light on η = 1, k = 0):
 # there the numerator vanishes too, and F = 0 is the limit.
 _TINY = 1e-30

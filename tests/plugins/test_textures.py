@@ -153,3 +153,27 @@ def test06_spectral_variants_take_a_bitmap_reflectance(variant, tmp_path):
     with pytest.raises(RuntimeError, match=r"texture with values in \[1.7, 1.7\]"):
         mi.load_dict({"type": "lambert", "reflectance": {"type": "bitmap", "filename": bright,
                                                           "raw": True}})
+
+
+@pytest.mark.parametrize("spec,key,value", [
+    ({"type": "ashikhmin"}, "specular_reflectance.value", 3.0),
+    ({"type": "lambert"}, "reflectance.value", -0.5),
+    ({"type": "cooktorrance", "eta": 1.5, "k": 1.0}, "eta.value", -1.0),
+    ({"type": "cooktorrance", "eta": 1.5, "k": 1.0}, "k.value", 1e12),
+    ({"type": "cooktorrance", "transmission": True, "multiscatter": True}, "eta", -1.0),
+])
+def test07_values_set_through_traverse_are_clipped(variant_llvm_ad_rgb, np_rng, spec, key,
+                                                   value):
+    """mi.traverse does not run the load-time checks: the lobes clip what they read into the
+    parameter's range (a reflectance into [0, 1], η and k into [0, 1e6], a dielectric's η
+    into [1e-6, 1e6]), so no value is negative, NaN or raises (ashikhmin's Rs = 3 gave
+    negative f, glass at η = −1 a ValueError, k = 1e12 NaN)."""
+    from helpers import eval_pdf, random_directions
+
+    bsdf = mi.load_dict(spec)
+    params = mi.traverse(bsdf)
+    params[key] = value
+    params.update()
+    wi, wo = random_directions(np_rng, 2000), random_directions(np_rng, 2000)
+    f, pdf = eval_pdf(bsdf, wi, wo)[:2]
+    assert np.isfinite(f).all() and np.isfinite(pdf).all() and f.min() >= 0 and pdf.min() >= 0
