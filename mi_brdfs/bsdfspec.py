@@ -31,7 +31,9 @@ from .errors import MiBrdfsError, mitsuba_error_line
 def parse(spec):
     """
     The BSDF spec in canonical form: a dict (with a ``type``), an XML fragment (str starting
-    with ``<``) or a ``mi.BSDF``; a command-line string is parsed into a dict or a fragment.
+    with ``<``) or a ``mi.BSDF``; a command-line string is parsed into a dict or a fragment,
+    and a BSDF file (a ``pathlib.Path``, or a str naming an existing ``.xml`` file, blanks in
+    its path included) becomes the fragment it holds.
 
     Raises MiBrdfsError with one line for anything else.
     """
@@ -45,6 +47,9 @@ def parse(spec):
         return spec
     if isinstance(spec, str) and spec.lstrip().startswith("<"):
         return spec.strip()
+    if isinstance(spec, os.PathLike) or (isinstance(spec, str) and spec.endswith(".xml")
+                                         and os.path.isfile(spec)):
+        return _bsdf_file(os.fspath(spec)).strip()  # a file, whatever blanks its path has
     if isinstance(spec, str):
         try:
             tokens = shlex.split(spec)
@@ -286,8 +291,12 @@ def _bsdf_file(path: str) -> str:
 
     if not os.path.isfile(path):
         raise MiBrdfsError(f"BSDF file {path} does not exist")
-    with open(path) as f:
-        text = f.read()
+    try:
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+    except UnicodeDecodeError as e:
+        raise MiBrdfsError(f"BSDF file {path} is not UTF-8 text (byte {e.start}: "
+                           f"{e.reason})") from None
     try:
         tag = ET.fromstring(text).tag
     except ET.ParseError as e:

@@ -167,3 +167,16 @@ def test08_a_check_loads_its_spec_once(variant_llvm_ad_rgb, monkeypatch):
         assert bsdfspec.load_bsdf(spec) is bsdfspec.load_bsdf(spec)
         other = bsdfspec.load_bsdf("roughconductor alpha=0.4")
         assert other is not bsdfspec.load_bsdf(spec)
+
+
+def test09_a_file_path_with_blanks_or_as_path(variant_scalar_rgb, tmp_path):
+    """The Python API takes a BSDF file as the CLI does: a str whose path has a blank (it was
+    split as 'type key=value'), and a pathlib.Path (it was refused)."""
+    folder = tmp_path / "my materials"
+    folder.mkdir()
+    path = folder / "gold metal.xml"
+    path.write_text('<bsdf type="roughconductor"><string name="material" value="Au"/></bsdf>')
+    for spec in (str(path), path):
+        bsdf = bsdfspec.load_bsdf(spec)
+        assert "RoughConductor" in str(bsdf) and "0.143036" in str(bsdf)  # gold's eta
+        assert checks.check_consistency(spec, n=50).passed
