@@ -407,8 +407,10 @@ def cmd_tables(args) -> int:
     from ..progress import Progress
     from ..scattering.multiscatter import TABLE_PATH
 
+    from ..imageio import check_writable
+
     _jit_variant("mi-brdfs tables")
-    out = args.out or TABLE_PATH
+    out = check_writable(args.out or TABLE_PATH)  # before minutes of work, not after
     samples = args.samples or tables.SAMPLES
     samples_dielectric = args.samples or tables.SAMPLES_DIELECTRIC
     rows = len(tables.KINDS) * (len(tables.SHADOWINGS) * tables.N_ALPHA +

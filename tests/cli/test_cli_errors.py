@@ -67,6 +67,7 @@ BAD = [
     (["render", "noversion.xml", "--spp", "1"], "noversion.xml holds a <bsdf>, not a <scene>"),
     (["compare", "shape.xml", "--swap", "a=diffuse"], "shape.xml holds a <shape>, not a <scene>"),
     (["simplify", "bsdf.xml", "--quick"], "bsdf.xml holds a <bsdf>, not a <scene>"),
+    (["tables", "-o", "/nonexistent/t.npz"], "folder /nonexistent does not exist"),
     # --only that names nothing, or nothing the run has: no run of everything or of nothing
     (["audit", "--out", ".", "--quick", "--only", "ashikhmin,lafortune"],
      "--only ashikhmin,lafortune --quick: none of these is in the quick audit"),
