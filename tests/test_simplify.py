@@ -566,3 +566,14 @@ def test13_dielectric_multiscatter_can_be_dropped(variant_llvm_ad_rgb):
     rough, note = got["roughdielectric"]
     assert "multiscatter" not in _params_of(rough) and note.startswith("single scattering")
     load_bsdf(ET.tostring(rough, encoding="unicode"))
+
+
+def test20_quick_keeps_a_smaller_declared_resolution(tmp_path):
+    """--quick renders at QUICK_RES at most: a scene that declares res = 32 keeps 32 (it was
+    raised to 128), one that declares 512 renders at 128, an explicit define wins."""
+    path = tmp_path / "s.xml"
+    path.write_text("<scene/>")
+    for declared, wanted in (("32", "32"), ("512", str(simplify_pipeline.QUICK_RES))):
+        defines, _ = simplify_pipeline._defines(path, None, {"res": declared}, True)
+        assert defines["res"] == wanted
+    assert simplify_pipeline._defines(path, {"res": 700}, {"res": "32"}, True)[0]["res"] == "700"

@@ -78,7 +78,7 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
     the caller's is set again on return, and when simplify raises.
     ``output``: where to write the simplified scene (None: not written). ``report``: a folder
     for SIMPLIFY.md, the plot and (by default) the cache. ``quick``: ``res`` of
-    :data:`QUICK_RES` (where the scene declares that default) and fewer spp, repeats and fit
+    :data:`QUICK_RES` at most (where the scene declares that default) and fewer spp, repeats and fit
     steps. ``spp``: per seed, for the original and every candidate. ``defines``: ``<default>``
     overrides. ``cache``: True (``report/cache`` or :func:`default_cache_dir`), a folder, or
     False. ``confidence``: standard errors by which a speed-up must exceed 1 to replace a
@@ -234,7 +234,10 @@ def _defines(path: Path, defines: dict | None, scene_defaults: dict, quick: bool
     notes = []
     if quick and "res" not in defines:
         if "res" in scene_defaults:
-            defines["res"] = str(QUICK_RES)
+            declared = scene_defaults["res"]
+            # at most QUICK_RES: a scene that declares less keeps its own
+            defines["res"] = str(min(QUICK_RES, int(declared))) if declared.isdigit() \
+                else str(QUICK_RES)
         else:
             notes.append("--quick: the scene declares no <default name=\"res\">, so it renders "
                          "at its own resolution")
