@@ -232,6 +232,8 @@ def _spread(passes: _Passes, spread: bool, workers: int) -> str | None:
         # helpers kept from a render of this scene: they start on the first pass at once
         return passes.spread_over(workers, passes.first)
     seconds_per_spp = passes.first()
+    if not schedule.pass_times:  # interrupted during the first pass: nothing was timed
+        return None
     remaining_s = math.inf
     if schedule.spp is not None:
         remaining_s = seconds_per_spp * (schedule.spp - schedule.issued)
@@ -331,27 +333,31 @@ def render(scene_path: str | os.PathLike, spp: int | None = None, seed: int = 0,
 
 class _GracefulInterrupt:
     """
-    While active, the first Ctrl-C only sets :attr:`requested` (the render loop then stops
-    after the passes under way); it also restores Python's handler, so a second one raises
-    KeyboardInterrupt. Outside the main thread, where no handler can be set, it does nothing.
+    While active, the first Ctrl-C (SIGINT) or SIGTERM (what ``timeout`` and batch schedulers
+    send) only sets :attr:`requested` (the render loop then stops after the passes under way);
+    it also restores Python's handlers, so a second one raises KeyboardInterrupt (SIGINT) or
+    ends the process (SIGTERM). Outside the main thread, where no handler can be set, it does
+    nothing.
     """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
     def __init__(self):
         self.requested = False
-        self._previous = None
+        self._previous = {}
 
     def _handler(self, signum, frame):
         self.requested = True
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        self.__exit__()
 
     def __enter__(self):
         try:
-            self._previous = signal.signal(signal.SIGINT, self._handler)
+            self._previous = {s: signal.signal(s, self._handler) for s in self.SIGNALS}
         except ValueError:  # not the main thread
-            self._previous = None
+            self._previous = {}
         return self
 
     def __exit__(self, *exc):
-        if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
-            self._previous = None
+        for s, previous in self._previous.items():
+            signal.signal(s, previous if previous is not None else signal.SIG_DFL)
+        self._previous = {}

@@ -181,3 +181,20 @@ def test13_kept_helpers_start_at_once_on_the_same_scene(variant_scalar_rgb, monk
            progress=False)
     assert handed == [True, False]
     R.close_helpers()
+
+
+def test_interrupted_during_the_first_pass_spreads_nothing(monkeypatch):
+    """A Ctrl-C during the first pass of a scalar render (here with a time budget) leaves no
+    pass timed: the decision to spread the render over processes is then 'no' (it was an
+    IndexError on the missing timing), and render() goes on to raise KeyboardInterrupt,
+    having nothing to keep."""
+    from types import SimpleNamespace
+
+    from mi_brdfs import render as render_module
+    from mi_brdfs import render_pool
+
+    monkeypatch.setattr(render_pool, "_helpers_ready", lambda *a: False)
+    schedule = SimpleNamespace(pass_times=[], spp=100, issued=1, budget=10.0)
+    passes = SimpleNamespace(schedule=schedule, variant="scalar_rgb", path="s.xml", defines={},
+                             first=lambda: 0.0)
+    assert render_module._spread(passes, True, 4) is None

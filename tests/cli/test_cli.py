@@ -97,14 +97,17 @@ def test03_bad_input_one_line_no_output(tmp_path, case, capsys, monkeypatch):
 
 
 @pytest.mark.skipif(not LLVM_OK, reason="no working libLLVM")
-def test04_ctrl_c_keeps_what_is_done(tmp_path):
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test04_ctrl_c_keeps_what_is_done(tmp_path, signum):
+    """Ctrl-C, and SIGTERM (what timeout and batch schedulers send: it kept nothing), stop
+    after the passes under way and write what is done, complete passes only."""
     out = tmp_path / "i.exr"
     proc = subprocess.Popen(CLI + ["render", "cbox", "-D", "res=16", "--spp", "10000000",
                                    "--pass-spp", "64", "-o", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=dict(os.environ, MI_BRDFS_NO_PROGRESS="1"))
     time.sleep(4)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(signum)
     stdout, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 130, stderr
     assert "interrupted after" in stdout
