@@ -350,6 +350,9 @@ def parse_cli(tokens: list[str]) -> list:
                                    f"(write e.g. 'roughconductor alpha=0.3')")
             if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.]*", key) or value == "":
                 raise MiBrdfsError(f"malformed parameter '{token}': expected key=value")
+            if key in specs[-1]:
+                raise MiBrdfsError(f"parameter '{key}' is given twice for "
+                                   f"'{specs[-1]['type']}' (give it once)")
             specs[-1][key] = parse_value(value)
         elif token.lstrip().startswith("<"):
             specs.append(token)

@@ -24,6 +24,16 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USER_ERROR, f"mi-brdfs: error: {where}{message} (see --help)\n")
 
 
+
+class _Once(argparse.Action):
+    """An option that may be given once: a second one is an error (argparse would silently
+    keep the last)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if getattr(namespace, self.dest, None) is not None:
+            parser.error(f"argument {option_string}: given twice (give it once)")
+        setattr(namespace, self.dest, values)
+
 def _number(convert, what: str, valid, allowed: str):
     """An argparse type: ``convert(text)``, which must satisfy ``valid``; else one line."""
     def parse(text: str):
@@ -227,7 +237,7 @@ def _add_fit(sub) -> None:
                     help="the BSDF to match: a plugin name followed by its key=value parameters "
                          "(e.g. cooktorrance material=Au alpha=0.2), a built-in, an XML file or "
                          "a quoted XML fragment")
-    ft.add_argument("--model", nargs="+", required=True, metavar="MODEL",
+    ft.add_argument("--model", nargs="+", required=True, metavar="MODEL", action=_Once,
                     help="the model to fit: a plugin name with key=value parameters (its values "
                          "are the start; those not in --free stay fixed), e.g. --model phong "
                          "lobe=halfway diffuse_reflectance=0")

@@ -68,6 +68,11 @@ BAD = [
     (["compare", "shape.xml", "--swap", "a=diffuse"], "shape.xml holds a <shape>, not a <scene>"),
     (["simplify", "bsdf.xml", "--quick"], "bsdf.xml holds a <bsdf>, not a <scene>"),
     (["tables", "-o", "/nonexistent/t.npz"], "folder /nonexistent does not exist"),
+    # a second value would silently replace the first
+    (["check", "roughconductor", "alpha=0.3", "alpha=0.5"],
+     "parameter 'alpha' is given twice for 'roughconductor'"),
+    (["fit", "roughconductor", "--model", "cooktorrance", "--model", "ward"],
+     "argument --model: given twice"),
     # --only that names nothing, or nothing the run has: no run of everything or of nothing
     (["audit", "--out", ".", "--quick", "--only", "ashikhmin,lafortune"],
      "--only ashikhmin,lafortune --quick: none of these is in the quick audit"),
