@@ -55,6 +55,9 @@ _seconds = _number(float, "a number", lambda v: math.isfinite(v) and v > 0,
                    "must be finite and > 0 seconds")
 _positive = _number(float, "a number", lambda v: math.isfinite(v) and v > 0,
                     "must be finite and > 0")
+#: A relative error: a relative RMSE of 1 is that of a black image against any other
+_relative = _number(float, "a number", lambda v: 0 < v < 1,
+                    "must lie in (0, 1) (a relative RMSE; 1 is a black image's)")
 
 
 def _output(*suffixes: str):
@@ -273,7 +276,7 @@ def _add_simplify(sub) -> None:
                                     "tolerance (every other byte kept) and verify it by one more "
                                     "render (see mi_brdfs.simplify).")
     sm.add_argument("scene", metavar="SCENE", help="scene XML file or bundled scene name")
-    sm.add_argument("--tolerance", type=_positive, default=0.01, metavar="T",
+    sm.add_argument("--tolerance", type=_relative, default=0.01, metavar="T",
                     help="relative RMSE of the converged image against the original's "
                          "(RMSE over the mean; default 0.01)")
     _add_variant(sm)

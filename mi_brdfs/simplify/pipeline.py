@@ -45,10 +45,10 @@ def _public(fn):
 
 def _check_tolerance(tolerance) -> float:
     ok = isinstance(tolerance, (int, float)) and not isinstance(tolerance, bool) \
-        and math.isfinite(tolerance) and tolerance > 0
-    if not ok:
-        raise MiBrdfsError(f"simplify: tolerance = {tolerance!r} is invalid: must be a finite "
-                           f"number > 0 (a relative RMSE, e.g. 0.01)")
+        and 0 < tolerance < 1
+    if not ok:  # a relative RMSE of 1 is a black image's against any other
+        raise MiBrdfsError(f"simplify: tolerance = {tolerance!r} is invalid: must lie in "
+                           f"(0, 1) (a relative RMSE, e.g. 0.01; 1 is a black image's)")
     return float(tolerance)
 
 

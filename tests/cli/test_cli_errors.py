@@ -68,6 +68,7 @@ BAD = [
     (["compare", "shape.xml", "--swap", "a=diffuse"], "shape.xml holds a <shape>, not a <scene>"),
     (["simplify", "bsdf.xml", "--quick"], "bsdf.xml holds a <bsdf>, not a <scene>"),
     (["tables", "-o", "/nonexistent/t.npz"], "folder /nonexistent does not exist"),
+    (["simplify", "furnace", "--tolerance", "2"], "argument --tolerance: must lie in (0, 1)"),
     # a second value would silently replace the first
     (["check", "roughconductor", "alpha=0.3", "alpha=0.5"],
      "parameter 'alpha' is given twice for 'roughconductor'"),
