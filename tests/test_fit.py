@@ -403,3 +403,13 @@ def test16_numbered_and_signed_parameters(variant_llvm_ad_rgb):
     assert _energy(dict(lobes, cz_0=0.5, cx_0=-1.0, cy_0=-1.0), figures) == []  # 0.5 + 0.3
     assert _energy({"type": "ashikhmin", "diffuse_reflectance": 0.9,
                     "specular_reflectance": 0.9}, figures) == []
+
+
+def test14_a_perfect_mirrors_index_is_fitted(variant_llvm_ad_rgb):
+    """Mitsuba's default roughconductor (η = 0, k = 1: F ≡ 1) by cooktorrance smith, η and k
+    free: the start at η = 0 had a NaN derivative (∂a/∂η = ∞·0 in the Fresnel term's square
+    root) and every start diverged; now the fit recovers α and the mirror's reflectance."""
+    result = fit({"type": "roughconductor"}, {"type": "cooktorrance", "shadowing": "smith"},
+                 pairs=4096, steps=200)
+    assert result.residual < 1e-3 and not result.flags, (result.residual, result.flags)
+    assert result.spec["alpha"] == pytest.approx(0.1, rel=1e-2)

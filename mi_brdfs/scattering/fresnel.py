@@ -50,8 +50,10 @@ def exact(cos_theta_i, eta, k):
     s2 = 1.0 - c2
     ek = eta * k
     t0 = eta * eta - k * k - s2
-    ab = dr.sqrt(t0 * t0 + 4.0 * ek * ek)  # a² + b²
-    a = dr.sqrt(dr.maximum(0.5 * (ab + t0), 0.0))
+    # a² + b², and a; safe_sqrt: the same values, and a derivative of 0 (not ∞·0 = NaN) where
+    # the argument is 0, as a is for a perfect mirror (η = 0)
+    ab = dr.safe_sqrt(t0 * t0 + 4.0 * ek * ek)
+    a = dr.safe_sqrt(0.5 * (ab + t0))
     b2 = dr.maximum(0.5 * (ab - t0), 0.0)
     am, ap = a - c, a + c
     rs = (am * am + b2) / dr.maximum(ap * ap + b2, _TINY)
