@@ -133,8 +133,23 @@ def describe(spec) -> str:
         params = ", ".join(f"{k}={_short(v)}" for k, v in spec.items() if k != "type")
         return f"{spec.get('type', '?')}({params})" if params else str(spec.get("type", "?"))
     if isinstance(spec, str):
-        return " ".join(spec.split())[:60]
+        return _describe_xml(spec)
     return type(spec).__name__
+
+
+def _describe_xml(text: str) -> str:
+    """An XML ``<bsdf>`` as :func:`describe` names a dict: its type and its direct parameters
+    (a nested element by its type); its first 60 characters where it does not parse."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError:
+        return " ".join(text.split())[:60]
+    params = [f"{child.get('name')}={child.get('value', child.get('type', '…'))}"
+              for child in root if child.get("name") is not None]
+    kind = root.get("type", root.tag)
+    return f"{kind}({', '.join(params)})" if params else kind
 
 
 def _short(value) -> str:

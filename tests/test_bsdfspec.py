@@ -180,3 +180,14 @@ def test09_a_file_path_with_blanks_or_as_path(variant_scalar_rgb, tmp_path):
         bsdf = bsdfspec.load_bsdf(spec)
         assert "RoughConductor" in str(bsdf) and "0.143036" in str(bsdf)  # gold's eta
         assert checks.check_consistency(spec, n=50).passed
+
+
+def test10_an_xml_bsdf_is_named_by_its_type_and_parameters(variant_scalar_rgb):
+    """Tables and legends name an XML BSDF as they name a dict (it was its first 60
+    characters: '<bsdf type="roughconductor"> <float name="alpha" value="0.').."""
+    xml = ('<bsdf type="roughconductor"><float name="alpha" value="0.3"/>'
+           '<string name="material" value="Au"/>'
+           '<texture type="bitmap" name="specular_reflectance"/></bsdf>')
+    assert bsdfspec.describe(xml) == \
+        "roughconductor(alpha=0.3, material=Au, specular_reflectance=bitmap)"
+    assert bsdfspec.describe('<bsdf type="diffuse"/>') == "diffuse"
