@@ -97,7 +97,7 @@ def load_scene(path: str | os.PathLike, defines: dict | None = None, bsdfs: dict
         if not bsdfs:
             scene = mi.load_file(str(path), **params)  # (relative paths: the file's folder)
         else:
-            xml = swap_bsdfs(text, bsdfs)
+            xml = swap_bsdfs(text, bsdfs, path.parent)
             # relative paths in the scene (textures, meshes) resolve against its folder, as in
             # mi.load_file; the resolver is global, so it is restored afterwards
             saved = mi.FileResolver(mi.file_resolver())
@@ -160,8 +160,30 @@ def _check_film(name: str, xml: str, params: dict) -> None:
                                       if child.get("value", "").startswith("$") else ""))
 
 
-def swap_bsdfs(xml: str, bsdfs: dict) -> str:
-    """The scene XML text with each ``<bsdf id=...>`` of ``bsdfs`` replaced (see load_scene)."""
+def _inline_includes(root, folder: Path, depth: int = 0) -> None:
+    """Replace each ``<include filename=...>`` under ``root`` by the elements of the scene file
+    it names (relative to ``folder``), as Mitsuba merges them, so that their BSDFs can be
+    swapped too; included files may include others (up to 16 deep)."""
+    import xml.etree.ElementTree as ET
+
+    for parent in list(root.iter()):
+        for i, child in enumerate(list(parent)):
+            if child.tag != "include" or depth > 16:
+                continue
+            path = folder / child.get("filename", "")
+            try:
+                included = ET.fromstring(scene_text(path))
+            except (OSError, ET.ParseError) as e:
+                raise MiBrdfsError(f"cannot read the included file {path.name}: {e}") from None
+            _inline_includes(included, path.parent, depth + 1)
+            parent.remove(child)
+            for j, element in enumerate(list(included)):
+                parent.insert(i + j, element)
+
+
+def swap_bsdfs(xml: str, bsdfs: dict, folder: Path | None = None) -> str:
+    """The scene XML text with each ``<bsdf id=...>`` of ``bsdfs`` replaced (see load_scene),
+    those of files it includes too (``folder``: the scene's, where they are found)."""
     import xml.etree.ElementTree as ET
 
     from .bsdfspec import to_xml
@@ -170,6 +192,8 @@ def swap_bsdfs(xml: str, bsdfs: dict) -> str:
         root = ET.fromstring(xml)
     except ET.ParseError as e:
         raise MiBrdfsError(f"cannot parse the scene to swap its materials: {e}") from None
+    if folder is not None:
+        _inline_includes(root, folder)
     for bsdf_id, spec in bsdfs.items():
         new = ET.fromstring(to_xml(spec, id=bsdf_id))
         found = False

@@ -198,3 +198,20 @@ def test_interrupted_during_the_first_pass_spreads_nothing(monkeypatch):
     passes = SimpleNamespace(schedule=schedule, variant="scalar_rgb", path="s.xml", defines={},
                              first=lambda: 0.0)
     assert render_module._spread(passes, True, 4) is None
+
+
+def test_a_bsdf_of_an_included_file_is_swapped(variant_scalar_rgb, tmp_path):
+    """load_scene(bsdfs=...) (compare --swap) finds an id in a file the scene <include>s: the
+    sphere's material is the swapped one (it was 'the scene has no <bsdf id="metal">')."""
+    (tmp_path / "materials.xml").write_text(
+        '<scene version="3.0.0"><bsdf type="roughconductor" id="metal"/></scene>')
+    (tmp_path / "main.xml").write_text(
+        '<scene version="3.0.0"><integrator type="path"/><sensor type="perspective">'
+        '<film type="hdrfilm"><integer name="width" value="4"/>'
+        '<integer name="height" value="4"/></film></sensor><emitter type="constant"/>'
+        '<include filename="materials.xml"/><shape type="sphere"><ref id="metal"/></shape>'
+        '</scene>')
+    scene = load_scene(tmp_path / "main.xml", bsdfs={"metal": {"type": "lambert"}})
+    assert type(scene.shapes()[0].bsdf()).__name__ == "Lambert"
+    with pytest.raises(MiBrdfsError, match='no <bsdf id="wood">'):
+        load_scene(tmp_path / "main.xml", bsdfs={"wood": {"type": "lambert"}})
