@@ -214,7 +214,8 @@ def cmd_simplify(args) -> int:
     mi_brdfs.use_variant(args.variant)
     result = simplify(path, args.tolerance, output=out, report=args.report, quick=args.quick,
                       spp=args.spp, defines=defines, cache=not args.no_cache,
-                      confidence=args.confidence, progress=not args.quiet)
+                      confidence=args.confidence, objective=args.objective,
+                      progress=not args.quiet)
     print(result.summary())
     return 0
 

@@ -292,9 +292,14 @@ def _add_simplify(sub) -> None:
                     help="samples per pixel of each render (default 64; --quick: 16)")
     sm.add_argument("-D", dest="defines", action="append", default=[], metavar="name=value",
                     help="override a <default> of the scene (repeatable)")
+    sm.add_argument("--objective", choices=("simplicity", "speed"), default="simplicity",
+                    help="simplicity (default): a simpler candidate within the tolerance and "
+                         "not measurably slower replaces a material (the fastest of them); "
+                         "speed: only a measurably faster one")
     sm.add_argument("--confidence", type=_finite, default=2.0, metavar="Z",
-                    help="standard errors by which a candidate's speed-up must exceed 1 to "
-                         "replace a material (default 2; 0: any estimated gain)")
+                    help="standard errors by which a candidate's speed-up must differ from 1 "
+                         "to count as measurably faster or slower (default 2; 0: any estimated "
+                         "difference)")
     sm.add_argument("--no-cache", action="store_true", help="measure everything again")
     sm.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     sm.set_defaults(func=cmd_simplify)

@@ -79,14 +79,24 @@ repeat-to-repeat spread of the timing ratios (their sample standard deviation, f
 or more: with fewer the error is unknown and no candidate counts as measurably faster) and of
 the per-pixel variance differences.
 
-**Choice** (:mod:`.choose`, :mod:`.pipeline`). Per material, the candidate with the least T
-among those with bias_hi ≤ τ, and only when its speed-up exceeds 1 by ``confidence`` standard
-errors (default 2): a candidate that is not measurably faster leaves the original in place. The
+**Choice** (:mod:`.choose`, :mod:`.pipeline`). The package's principle is to model only what
+a scene requires, so by default (``objective="simplicity"``) a material is replaced by a
+candidate with bias_hi ≤ τ that is **simpler** and **not measurably slower** (its speed-up not
+below 1 by ``confidence`` standard errors, default 2); of several, the one with the least T.
+Simpler, in this order: Mitsuba's built-in of the same model (compiled, no Python plugin), a
+lobe fewer, a model of fewer lobes or parameters fitted to it, a feature left out (the energy
+compensation, the exact Fresnel term for Schlick's, Oren-Nayar's full form); a switch that
+swaps one feature for another (the distribution, the sampler) is not simpler
+(:data:`.choose.SIMPLER_KINDS`, :data:`.choose.SIMPLER_SWITCHES`), and the report says which
+reason made each choice. With ``objective="speed"`` only the candidate with the least T among
+those whose speed-up exceeds 1 by ``confidence`` standard errors replaces the original. The
 combined bias² is predicted as the sum of the chosen ones' (replacements whose bias² add up
 beyond τ² are dropped, the largest first); then the **simplified scene** (each chosen
 material's ``<bsdf>...</bsdf>`` text replaced, every other byte of the file kept) is measured
 as one more candidate, at other seeds (101, 102, ...) and with its own timing: the
-verification, with its measured bias and its predicted and measured speed-up. Should its
+verification, with its measured bias and its predicted and measured speed-up, and whether the
+two agree within 2 standard errors of their difference (the prediction's from its parts'
+timing and variance errors), which the report says either way. Should its
 bias_hi exceed τ, the replacement with the largest bias is dropped and the scene measured
 again. The results, SIMPLIFY.md and the plot: :mod:`.report`.
 

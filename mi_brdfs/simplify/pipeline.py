@@ -16,7 +16,7 @@ from pathlib import Path
 from ..errors import MiBrdfsError, ParameterError, counts, mitsuba_error_line
 from ..variants import keeps_variant
 from .candidates import _cached_fit, candidates_for, kept_reason
-from .choose import _choose, _derive, _predict
+from .choose import OBJECTIVES, _choose, _derive, _predict
 from .measure import (
     CACHE_VERSION, MAX_SEEDS, MIN_REPEATS, _Cache, _Engine, _key, _original_numbers,
     default_cache_dir,
@@ -66,7 +66,7 @@ def _report_dir(report) -> Path | None:
 def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, output=None,
              report=None, quick: bool = False, spp: int | None = None,
              defines: dict | None = None, cache=True, confidence: float = 2.0,
-             fits: bool = True, repeats: int | None = None,
+             objective: str = "simplicity", fits: bool = True, repeats: int | None = None,
              progress: bool = False) -> SimplifyResult:
     """
     Measure cheaper candidates for every material of ``scene`` and write the simplified scene
@@ -81,8 +81,12 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
     :data:`QUICK_RES` at most (where the scene declares that default) and fewer spp, repeats and fit
     steps. ``spp``: per seed, for the original and every candidate. ``defines``: ``<default>``
     overrides. ``cache``: True (``report/cache`` or :func:`default_cache_dir`), a folder, or
-    False. ``confidence``: standard errors by which a speed-up must exceed 1 to replace a
-    material (0: any estimated gain). ``fits``: also fit cheaper models. ``repeats``: timing
+    False. ``objective``: ``simplicity`` (a simpler candidate within the tolerance and not
+    measurably slower replaces a material: the fastest of them; the order of simplicity:
+    :data:`~mi_brdfs.simplify.choose.SIMPLER_KINDS`, :data:`~mi_brdfs.simplify.choose.
+    SIMPLER_SWITCHES`) or ``speed`` (only a measurably faster one). ``confidence``: standard
+    errors by which a speed-up must differ from 1 to count as measurably faster or slower (0:
+    any estimated difference). ``fits``: also fit cheaper models. ``repeats``: timing
     pairs per candidate (3 or more, else no speed-up has a standard error: none counts as
     measurably faster but with ``confidence`` 0).
 
@@ -96,6 +100,9 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
             and math.isfinite(confidence) and confidence >= 0):
         raise MiBrdfsError(f"simplify: confidence = {confidence!r} is invalid: must be a finite "
                            f"number >= 0 (standard errors; 0: any estimated gain)")
+    if objective not in OBJECTIVES:
+        raise MiBrdfsError(f"simplify: objective = {objective!r} is invalid: must be one of "
+                           f"{', '.join(OBJECTIVES)}")
     path, data, out, report_dir, materials, scene_defaults, included = \
         _read(scene, output, report, defines)
     variant = _use_variant(variant)
@@ -118,7 +125,7 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
     bar = Progress(total, label=f"simplify {path.name}", unit=" scenes") if progress else None
     try:
         results = _measure(plans, engine, data, tolerance, bar)
-        ref_numbers, original_time = _decide(results, engine, tolerance, confidence)
+        ref_numbers, original_time = _decide(results, engine, tolerance, confidence, objective)
         predicted = _within_together(results, ref_numbers, tolerance, original_time, notes)
         verification, replacements, text, predicted = _verify(
             results, data, engine, ref_numbers, tolerance, original_time, predicted, notes)
@@ -135,7 +142,7 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
                             defines=defines, quick=quick, materials=results,
                             original=ref_numbers, replacements=replacements, text=text,
                             verification=verification, predicted=predicted, measured=measured,
-                            notes=notes, renders=engine.renders)
+                            notes=notes, renders=engine.renders, objective=objective)
     if out is not None:
         _write_scene(result, out)
     result.seconds = time.perf_counter() - clock
@@ -313,7 +320,8 @@ def _measure(plans: list, engine: _Engine, data: bytes, tolerance: float, bar) -
     return results
 
 
-def _decide(results: list, engine: _Engine, tolerance: float, confidence: float) -> tuple:
+def _decide(results: list, engine: _Engine, tolerance: float, confidence: float,
+            objective: str) -> tuple:
     """
     (the original's numbers, its time to the tolerance): every measured candidate derived
     against them (the original as one with ratios 1 and no bias), and each material's choice.
@@ -329,7 +337,7 @@ def _decide(results: list, engine: _Engine, tolerance: float, confidence: float)
         for c in r.candidates:
             if c.ok:
                 _derive(c, ref_numbers, tolerance, original_time)
-        _choose(r, tolerance, confidence)
+        _choose(r, tolerance, confidence, objective)
     return ref_numbers, original_time
 
 

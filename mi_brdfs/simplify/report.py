@@ -81,6 +81,7 @@ class SimplifyResult:
     seconds: float = 0.0
     notes: list = field(default_factory=list)
     renders: int = 0
+    objective: str = "simplicity"
 
     def table(self, material: MaterialResult) -> str:
         """A Markdown table of one material's candidates."""
@@ -123,7 +124,8 @@ class SimplifyResult:
 
     def summary(self) -> str:
         """The printed report: the tables, the replacements and the verification."""
-        lines = [f"simplify {self.scene.name} (tolerance {self.tolerance:g} relative RMSE, "
+        lines = [f"simplify {self.scene.name} (objective {self.objective}, tolerance "
+                 f"{self.tolerance:g} relative RMSE, "
                  f"{self.variant}, {self.spp} spp per render, {self.renders} renders"
                  + (f", {' '.join(f'{k}={v}' for k, v in self.defines.items())}"
                     if self.defines else "") + f", {self.seconds:.0f} s)", "",
@@ -147,8 +149,9 @@ class SimplifyResult:
                 f"{me['noise']:.2g}) "
                 f"{'within' if v.bias_hi <= self.tolerance else 'OVER'} the tolerance "
                 f"{self.tolerance:g}; speed-up to the tolerance predicted "
-                f"{self.predicted['speedup']:.3f}×, measured "
-                f"{_ratio(v.speedup, v.speedup_se)} (cost/spp "
+                f"{_ratio(self.predicted['speedup'], self.predicted.get('speedup_se', math.nan))}, "
+                f"measured {_ratio(v.speedup, v.speedup_se)}: "
+                f"{agreement(self.predicted, v)} (cost/spp "
                 f"{_ratio(me['cost_ratio'], me['cost_ratio_se'])}, variance "
                 f"{_ratio(me['variance_ratio'], me['variance_ratio_se'])})")
         if self.output:
@@ -170,6 +173,20 @@ def _seconds(t: float) -> str:
     if not math.isfinite(t):
         return "∞ (bias ≥ tolerance)"
     return f"{t:.3g} s"
+
+
+def agreement(predicted: dict, measured, confidence: float = 2.0) -> str:
+    """Whether the measured speed-up agrees with the predicted one within ``confidence``
+    standard errors of their difference (of logs), in words for the report."""
+    p, m = predicted.get("speedup", math.nan), measured.speedup
+    se = math.hypot(predicted.get("speedup_se", math.nan), measured.speedup_se)
+    if not (p > 0 and m > 0 and math.isfinite(se)):
+        return "their agreement is unknown (no standard error)"
+    gap = abs(math.log(m / p))
+    if gap <= confidence * se:
+        return f"they agree within {confidence:g} standard errors"
+    return (f"they DO NOT agree: {gap / se:.1f} standard errors apart (the parts' costs "
+            f"and variances do not add up to the whole scene's)")
 
 
 def plot(result: SimplifyResult, path) -> str:
@@ -242,7 +259,9 @@ def write_report(result: SimplifyResult, path) -> Path:
     lines = [
         f"# Simplification of {result.scene.name}", "",
         f"`mi-brdfs simplify {result.scene.name} --tolerance {result.tolerance:g}"
-        + (" --quick" if result.quick else "") + (f" {d}" if d else "") + f"`: "
+        + (" --quick" if result.quick else "")
+        + (" --objective speed" if result.objective == "speed" else "")
+        + (f" {d}" if d else "") + f"`: "
         f"{result.variant}, {result.spp} spp per render, {result.renders} renders, "
         f"{result.seconds:.0f} s.", "",
         "Each candidate is rendered in the scene with only its material replaced; its **bias** "
@@ -253,8 +272,15 @@ def write_report(result: SimplifyResult, path) -> Path:
         "**Cost/spp** and **variance** are relative to the original scene (cost: median of "
         "renders interleaved with the original's; ± one standard error); the **time to "
         f"{result.tolerance:g}** is V/(τ² − bias²), V the variance per second of render "
-        "(error² = bias² + V/t). A candidate replaces the original only when it is within "
-        "the tolerance and measurably faster (see `mi_brdfs.simplify`).", "",
+        "(error² = bias² + V/t). " + (
+            "A candidate replaces the original only when it is within the tolerance and "
+            "measurably faster (objective speed)."
+            if result.objective == "speed" else
+            "A candidate replaces the original when it is within the tolerance, simpler "
+            "(in this order: Mitsuba's built-in of the same model, a lobe fewer, a fitted "
+            "model of fewer lobes or parameters, a feature left out: the energy compensation, "
+            "the exact Fresnel term, Oren-Nayar's full form) and not measurably slower; of "
+            "several, the fastest (objective simplicity; see `mi_brdfs.simplify`)."), "",
         f"The original scene: {original['ref_seconds_per_spp'] * 1e3:.3g} ms per spp, "
         f"relative variance of a 1-spp image {original['variance_1spp_ref']:.3g}, so "
         f"{_seconds(original_time)} to reach {result.tolerance:g}.", "",
@@ -265,7 +291,7 @@ def write_report(result: SimplifyResult, path) -> Path:
         p = result.predicted
         lines.append(f"* predicted from the parts: bias {p['bias']:.4f}, cost/spp "
                      f"{p['cost_ratio']:.3f}×, variance {p['variance_ratio']:.3f}×, speed-up "
-                     f"{p['speedup']:.3f}×")
+                     f"{_ratio(p['speedup'], p.get('speedup_se', math.nan))}")
     lines += [f"* note: {n}" for n in result.notes]
     if result.figure:
         lines += ["", f"![error against time]({os.path.relpath(result.figure, path.parent)})"]
