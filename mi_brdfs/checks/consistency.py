@@ -36,12 +36,21 @@ def _rel(a: np.ndarray, b: np.ndarray, floor: float = 1e-7) -> np.ndarray:
     return np.where(scale < floor, 0.0, np.abs(a - b) / np.maximum(scale, floor))
 
 
-def _incident(rng, n: int) -> np.ndarray:
-    """Incident directions: uniform over the upper hemisphere, plus normal and grazing ones."""
+def _incident(rng, n: int, both_sides: bool = False) -> np.ndarray:
+    """Incident directions: uniform over the upper hemisphere, plus normal and grazing ones;
+    with ``both_sides`` (a BSDF that declares ``BackSide``: two-sided, or transmissive) every
+    other one mirrored below the surface, so that its back is checked too."""
     wi = batch.random_directions(rng, n, sphere=False)
     special = [batch.direction(np.radians(t)) for t in (0.0, 84.26, 89.0, 89.9)]
     wi[: len(special)] = special
+    if both_sides:
+        wi[1::2, 2] *= -1.0
     return wi
+
+
+def back_side(bsdf) -> bool:
+    """Whether ``bsdf`` scatters light that arrives from below its surface."""
+    return bool(int(bsdf.flags()) & int(mi.BSDFFlags.BackSide))
 
 
 #: A mismatch within this many times the float32 conditioning of its directions
@@ -91,13 +100,14 @@ def check_consistency(spec, n: int | None = None, seed: int = 0, rtol: float = R
                       ctx=None) -> CheckResult:
     """
     Sample weight == eval/pdf, bs.pdf == pdf(bs.wo), eval_pdf == (eval, pdf), sampled flags
-    valid, everything finite and non-negative: at ``n`` random incident directions (default
+    valid, everything finite and non-negative: at ``n`` random incident directions (from both
+    sides where the BSDF declares ``BackSide``; default
     100 000 in JIT variants, 400 in scalar ones). Works in every variant.
     """
     bsdf = load_bsdf(spec)
     n = n or (100_000 if batch.is_jit() else 400)
     rng = np.random.default_rng(seed)
-    wi = _incident(rng, n)
+    wi = _incident(rng, n, back_side(bsdf))
     s = batch.sample(bsdf, wi, rng.random(n), rng.random((n, 2)), ctx)
     e = batch.evaluate(bsdf, wi, s.wo, ctx)
     problems, details = [], {"samples": n}

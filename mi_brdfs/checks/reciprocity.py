@@ -39,7 +39,8 @@ def _angles(v: np.ndarray) -> str:
 @arguments(seed=valid_seed, min_cos=nonnegative)
 def reciprocity(spec, n: int | None = None, seed: int = 0, min_cos: float = 1e-3):
     """
-    f(a, b) and f(b, a) at ``n`` random pairs over the upper hemisphere.
+    f(a, b) and f(b, a) at ``n`` random pairs over the upper hemisphere (every other pair
+    over the lower one where the BSDF declares ``BackSide``).
 
     Returns → dict(a, b, f_ab, f_ba, asym, tol): ``asym`` = |f_ab − f_ba| / max(f_ab, f_ba) per
     pair (max over channels; 0 where both are 0), ``tol`` the pair's tolerance (:data:`RTOL`
@@ -52,11 +53,16 @@ def reciprocity(spec, n: int | None = None, seed: int = 0, min_cos: float = 1e-3
     b = batch.random_directions(rng, n, sphere=False)
     keep = (a[:, 2] > min_cos) & (b[:, 2] > min_cos)
     a, b = a[keep], b[keep]
-    f_ab = batch.evaluate(bsdf, a, b).value / b[:, 2:3]
-    f_ba = batch.evaluate(bsdf, b, a).value / a[:, 2:3]
+    if int(bsdf.flags()) & int(mi.BSDFFlags.BackSide):
+        # its back too: every other pair below the surface (reflection there is reciprocal as
+        # above; a pair across a refracting interface is not, by η², and is not drawn)
+        a[1::2, 2] *= -1.0
+        b[1::2, 2] *= -1.0
+    f_ab = batch.evaluate(bsdf, a, b).value / np.abs(b[:, 2:3])
+    f_ba = batch.evaluate(bsdf, b, a).value / np.abs(a[:, 2:3])
     scale = np.maximum(np.abs(f_ab), np.abs(f_ba))
     asym = np.where(scale > 0, np.abs(f_ab - f_ba) / np.where(scale > 0, scale, 1), 0.0)
-    tol = RTOL + CONDITIONING * EPS32 / np.minimum(a[:, 2], b[:, 2]) ** 2
+    tol = RTOL + CONDITIONING * EPS32 / np.minimum(np.abs(a[:, 2]), np.abs(b[:, 2])) ** 2
     return dict(a=a, b=b, f_ab=f_ab, f_ba=f_ba, asym=np.nan_to_num(asym, nan=np.inf).max(axis=1),
                 tol=tol)
 

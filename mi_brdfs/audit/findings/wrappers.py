@@ -17,8 +17,9 @@ that exits 1 while the defect is present, and an issue text with its prior art i
   pass-through samples, Null-only returns none (``repro_mask_context``).
 * ``twosided`` reports a back-side sample with the nested BSDF's component index
   (``repro_twosided_back_component``), and maps ``ctx.component`` to the back BSDF wrongly
-  (``repro_twosided_back_selection``); only the audit's own ``sides`` check
-  (:mod:`mi_brdfs.audit.sides`) draws back-facing ``wi``.
+  (``repro_twosided_back_selection``); the audit's own ``sides`` check
+  (:mod:`mi_brdfs.audit.sides`) and the consistency check, which draws back-facing ``wi`` for
+  a BSDF that declares ``BackSide``, see it.
 
 Check limitations: the test interaction had no surface tangents (``bumpmap``), float32 rounding
 at grazing angles (``normalmap`` on roughconductor), and Mitsuba's χ² harness, which either
@@ -148,7 +149,7 @@ FINDINGS = [
             "one the generic harness finding describes.")),
     # ------------------------------------------------------------------ twosided
     Finding(
-        bsdf="twosided", check=r"^sides$", configs="", verdict="defect",
+        bsdf="twosided", check=r"^(sides|consistency)$", configs="", verdict="defect",
         summary=(
             "A sample on the back side reports the component index of the nested BSDF, not "
             "twosided's index of that lobe. twosided lists the front BSDF's n0 lobes "
@@ -165,8 +166,10 @@ FINDINGS = [
             "records. Not a limit of the check: the API's sampled_component is 'the component "
             "index that was sampled' and twosided's own flags(c) say which side c belongs to; "
             "the fields are integers of successful samples, the same for every seed. The "
-            "battery's checks draw wi above the surface only, so only this audit check (the "
-            "'sides' column) sees it. Render impact: none in the shipped integrators (none "
+            "audit's 'sides' check sees it, and so does the battery's consistency check, "
+            "which draws every other wi below the surface for a BSDF that declares BackSide "
+            "(it reports the samples whose sampled_component's flags lack the sampled type: "
+            "with two different BSDFs). Render impact: none in the shipped integrators (none "
             "reads sampled_component)."),
         reproducer="validation/audit/repro_twosided_back_component.py",
         source=(f"{_TWOSIDED}: constructor lines 89-100 (front lobes, then back lobes); "
