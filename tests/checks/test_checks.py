@@ -367,3 +367,16 @@ def test06d_bumpmap_needs_the_tangents_the_harness_gives(variant_llvm_ad_rgb, mo
 
     monkeypatch.setattr(checks.batch, "interaction", no_tangents)
     assert not checks.check_consistency(bsdf, n=20_000).passed
+
+
+def test30_consistency_sees_the_back_of_a_two_sided_bsdf(jit):
+    """A BSDF that declares BackSide is checked from below too: twosided of two different
+    BSDFs reports back-side samples with the front lobe's component (a Mitsuba 3.9.1 defect,
+    validation/audit/repro_twosided_back_component.py), which drawing ωi above the surface
+    alone never saw; one-sided BSDFs and our dielectric from both sides still pass."""
+    two = {"type": "twosided", "a": {"type": "diffuse"},
+           "b": {"type": "roughconductor", "alpha": 0.3}}
+    result = checks.check_consistency(two, n=4000)
+    assert not result.passed and "not in flags(component)" in result.message
+    for spec in ({"type": "roughconductor"}, {"type": "cooktorrance", "transmission": True}):
+        assert checks.check_consistency(spec, n=4000).passed, spec
