@@ -317,6 +317,17 @@ def test12_an_exact_fit_has_no_flag(variant_llvm_ad_rgb):
     assert fit("diffuse reflectance=1", "lambert", **TINY).flags == []
 
 
+@pytest.mark.parametrize("target, model", [("roughplastic alpha=0.3", "ashikhmin"),
+                                           ("roughconductor", "ashikhmin")])
+def test12b_grazing_pairs_do_not_make_a_good_fit_useless(variant_llvm_ad_rgb, target, model):
+    """Fits whose f·cosθo residual a few grazing pairs push above 1 (ashikhmin's 1/max(cosθi,
+    cosθo) and the targets' grazing peaks) but which carry the target's light, f·cosθi·cosθo,
+    far better than no reflection at all are not called useless."""
+    result = fit(target, model, **TINY)
+    assert result.residual > 1.0 and result.residual_projected < 0.8, result.summary()
+    assert not any("zero model" in flag for flag in result.flags), result.flags
+
+
 def test13_a_diverged_start_is_flagged(variant_llvm_ad_rgb, monkeypatch):
     """One start whose objective is NaN (faked): the best of the others is returned, flagged."""
     from mi_brdfs.fit import optimise
