@@ -30,6 +30,7 @@ LOBE_DEFAULTS = {"cx": -1.0, "cy": -1.0, "cz": 1.0, "exponent": 30.0,
                  "specular_reflectance": 0.2}
 #: A lobe property's name: its kind, "_", its index (decimal, no leading zero).
 INDEXED = re.compile(r"^(cx|cy|cz|exponent|specular_reflectance)_(0|[1-9][0-9]*)$")
+LEADING_ZERO = re.compile(r"^(cx|cy|cz|exponent|specular_reflectance)_0[0-9]+$")
 #: Largest |Cx|, |Cy|, |Cz| accepted: their products with direction components stay far
 #: inside float32's range.
 COEFFICIENT_MAX = 1e30
@@ -51,6 +52,9 @@ def lobe_count(props) -> int:
         m = INDEXED.match(key)
         if m:
             found.setdefault(int(m.group(2)), key)
+        elif LEADING_ZERO.match(key):
+            raise ParameterError(PLUGIN, key, props[key], "a lobe's index is written without "
+                                 "a leading zero (cx_1, not cx_01)")
     count = max(found) + 1 if found else 1
     missing = [i for i in range(count) if i not in found] if found else []
     if missing:
@@ -154,9 +158,11 @@ class Lafortune(mi.BSDF):
          (Default: ``true``)
        -
 
-    The lobes are numbered 0, 1, 2, … without a gap; their count is one more than the largest
-    index given (one lobe, lobe 0, when none is given), and any property of a lobe left out
-    takes its default. With u = ωi, v = ωo in the local frame (z the normal), for each lobe
+    The lobes are numbered 0, 1, 2, … (decimal, no leading zero: ``cx_01`` is an error); their
+    count is one more than the largest index given (one lobe, lobe 0, when none is given).
+    Every lobe up to it needs at least one property of its own: a gap (``cx_1``, ``cy_1``,
+    ``cz_1`` with nothing for lobe 0) is an error, as its indices are likely mistyped. Any
+    other property of a lobe left out takes its default. With u = ωi, v = ωo in the local frame (z the normal), for each lobe
     gᵢ = Cx,i ux vx + Cy,i uy vy + Cz,i uz vz and :math:`c_i = \max(|C_{x,i}|, |C_{y,i}|,
     |C_{z,i}|)`:
 
@@ -188,8 +194,10 @@ class Lafortune(mi.BSDF):
     the mixture density over all lobes, and samples below the horizon have weight 0.
 
     A lobe whose reflectance is the constant 0 is left out entirely (flags, components,
-    sampling, cost), and so is a zero diffuse term; the components are the diffuse term, then
-    the lobes in order (``ctx.component`` picks one). Float32: the lobe is evaluated as
+    sampling, cost, ``mi.traverse``), and so is a zero diffuse term; the components are the
+    diffuse term, then the lobes left in, in order (``ctx.component`` picks one). So a
+    component's index is not its lobe's: with the diffuse term, lobe i is component i + 1,
+    less one for each lobe before it that is left out. Parameter names keep the lobe's index. Float32: the lobe is evaluated as
     Phong's, exp(n·log1p(−(1 − cos β))) with 1 − cos β free of cancellation, and no NaN, Inf
     or negative value is returned anywhere from n = 0 to 1e30, for C = 0 and at grazing
     angles.

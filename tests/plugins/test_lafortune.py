@@ -58,6 +58,10 @@ def test01_create(variant_llvm_ad_rgb):
         bsdf = mi.load_dict(lafortune(**params))
         assert type(bsdf).__name__ == "Lafortune"
         assert [bsdf.flags(i) for i in range(bsdf.component_count())] == components, params
+    # parameter names keep the lobe's index where a lobe before it is left out
+    keys = mi.traverse(mi.load_dict(lafortune(**cases[2][0]))).keys()
+    assert "specular_reflectance_1.value" in keys and "exponent_1" in keys, keys
+    assert not any(k.endswith("_0") or "_0." in k for k in keys), keys
     text = str(mi.load_dict(lafortune(normalize=False, **THREE)))
     assert "Lafortune[" in text and "normalize = false" in text and "lobe 2 = [" in text
     with pytest.raises(RuntimeError, match="unreferenced property"):
@@ -330,6 +334,8 @@ BAD = [
      r'lafortune: parameter "exponent_2" = 3 is invalid: lobe indices must run 0, 1, 2, … '
      r'without a gap, and lobe 1 has no property'),
     ({"exponent_1": 3.0}, r'"exponent_1" = 3 is invalid: .* lobe 0 has no property'),
+    ({"cx_01": 1.0, "cy_01": 1.0, "cz_01": 1.0},
+     r'"cx_01" = 1 is invalid: a lobe\'s index is written without a leading zero'),
     ({"exponent_0": -1.0}, r'"exponent_0" = -1 is invalid: must be finite and within '
                            r'\[0, 1e\+30\]'),
     ({"exponent_0": float("nan")}, r'"exponent_0" = nan is invalid'),
