@@ -17,6 +17,7 @@ from helpers import cli_one_line_error
 import mi_brdfs
 from mi_brdfs.cli import main
 from mi_brdfs.errors import MiBrdfsError
+from mi_brdfs.scenes import load_scene
 from mi_brdfs.simplify import pipeline as simplify_pipeline  # simplify() calls candidates_for
 from mi_brdfs.simplify import scene_bsdfs, simplify, splice
 
@@ -301,6 +302,23 @@ def test06_api_tolerance(tmp_path, tolerance):
         simplify(write_scene(tmp_path), tolerance, cache=False)
 
 
+def _fake_timings(monkeypatch, ratios):
+    """Renders as they are, but the timing repeats (seeds 1000, 1001, ...) take 1 s for the
+    original and ``ratios`` in turn for a candidate."""
+    from mi_brdfs.simplify import measure
+
+    mi_brdfs.use_variant("llvm_ad_rgb")
+    real = measure._Engine._render
+
+    def faked(self, scene, text, seed, spp):
+        image, seconds = real(self, scene, text, seed, spp)
+        if seed >= 1000:
+            seconds = 1.0 if text == self.data else ratios[(seed - 1000) % len(ratios)]
+        return image, seconds
+
+    monkeypatch.setattr(measure._Engine, "_render", faked)
+
+
 @pytest.mark.parametrize("ratios,kept", [((0.99, 0.991, 1.10), False), ((0.5, 0.52, 0.51), True)],
                          ids=["noisy-around-1", "consistently-faster"])
 def test07_speedup_bars_from_the_spread_of_repeats(tmp_path, monkeypatch, ratios, kept):
@@ -312,18 +330,7 @@ def test07_speedup_bars_from_the_spread_of_repeats(tmp_path, monkeypatch, ratios
     candidate consistently twice as fast is. (The objective speed: only a measurably faster
     candidate replaces; test21 runs the default, simplicity.)
     """
-    from mi_brdfs.simplify import measure
-
-    mi_brdfs.use_variant("llvm_ad_rgb")
-    real = measure._Engine._render
-
-    def faked(self, scene, text, seed, spp):
-        image, seconds = real(self, scene, text, seed, spp)
-        if seed >= 1000:  # the timing repeats (seeds 1000, 1001, ...): original 1 s
-            seconds = 1.0 if text == self.data else ratios[(seed - 1000) % len(ratios)]
-        return image, seconds
-
-    monkeypatch.setattr(measure._Engine, "_render", faked)
+    _fake_timings(monkeypatch, ratios)
     result = simplify(write_scene(tmp_path), TOLERANCE, cache=False, fits=False, repeats=3,
                       objective="speed", **SMALL)
     (ball,) = result.materials
@@ -418,25 +425,99 @@ MATERIAL_FILE = """<scene version="3.0.0">
 </scene>"""
 
 
-def test10_materials_of_included_files_are_named(tmp_path):
-    """simplify edits the scene file only: the materials of an <include>d file were skipped
-    without a word, or the scene declared to have no <bsdf>; now each included file with
-    materials is named, in the error or in the notes of the summary."""
-    (tmp_path / "mat.xml").write_text(MATERIAL_FILE)
-    text = TINY.replace("CARD", '    <include filename="mat.xml"/>\n')
+def test10_materials_of_included_files_are_simplified(tmp_path):
+    """The materials of a file the scene <include>s (from a subfolder, as the bundled scenes
+    do) are simplified too: the simplified file is written beside the output, every other byte
+    kept, and the output includes it instead of the original, which is untouched (they were
+    only named in the notes). A scene with no <bsdf> of its own is simplified through it."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "mat.xml").write_text(MATERIAL_FILE)
+    text = TINY.replace("CARD", '    <include filename="sub/$m.xml"/>\n').replace(
+        '<default name="res" value="24"/>', '<default name="res" value="24"/><default name="m" '
+        'value="missing"/>')
     only = tmp_path / "only.xml"
     only.write_text(text.replace('<bsdf type="lambert" id="ball">', '<ref id="inc"/><!--')
                     .replace("</bsdf>\n    </shape>", "-->\n    </shape>"))
-    with pytest.raises(MiBrdfsError, match=r"only.xml has no <bsdf> of its own, nothing to "
-                                           r"simplify: materials in included file mat.xml "
-                                           r"\(inc \(lambert\)\): left alone"):
-        simplify(only, TOLERANCE, cache=False)
+    out = tmp_path / "out.xml"
+    # -D m=mat names the file: merged, nothing references $m, which Mitsuba would refuse
+    result = simplify(only, TOLERANCE, output=out, cache=False, fits=False,
+                      variant="llvm_ad_rgb", **dict(SMALL, defines={"res": "16", "m": "mat"}))
+    assert [m.label for m in result.materials] == ["inc"]
+    material = result.materials[0]
+    assert material.candidates[material.chosen].label.startswith("diffuse"), result.summary()
+    assert (tmp_path / "sub" / "mat.xml").read_text() == MATERIAL_FILE
+    written = (tmp_path / "out.mat.xml").read_text()
+    element = MATERIAL_FILE[MATERIAL_FILE.index("<bsdf"):MATERIAL_FILE.index("</scene>") - 1]
+    assert written.replace(written[written.index("<bsdf"):written.rindex("</bsdf>") + 7],
+                           element) == MATERIAL_FILE
+    assert 'type="diffuse"' in written and 'id="inc"' in written
+    assert out.read_text() == only.read_text().replace('"sub/$m.xml"', '"out.mat.xml"')
+    assert f"wrote {out} and {tmp_path / 'out.mat.xml'}" in result.summary()
+    load_scene(out)  # as the command checks it
+
+
+def test10b_included_files_left_alone_are_named(tmp_path):
+    """A file included from another folder that names a file (its relative names would
+    resolve elsewhere) is left alone and named in the notes; an output whose included file
+    would overwrite a file the scene reads is refused before any work."""
+    import mitsuba as mi
+
+    (tmp_path / "sub").mkdir()
+    mi_brdfs.use_variant("llvm_ad_rgb")
+    mi.Bitmap(np.full((2, 2, 3), 0.5, dtype=np.float32)).write(str(tmp_path / "grey.exr"))
+    (tmp_path / "sub" / "mat.xml").write_text(MATERIAL_FILE.replace(
+        '<rgb name="reflectance" value="0.5, 0.4, 0.3"/>',
+        f'<texture type="bitmap" name="reflectance"><string name="filename" '
+        f'value="{tmp_path / "grey.exr"}"/></texture>'))
     mixed = tmp_path / "mixed.xml"
-    mixed.write_text(text)
+    mixed.write_text(TINY.replace("CARD", '    <include filename="sub/mat.xml"/>\n'))
     result = simplify(mixed, TOLERANCE, cache=False, fits=False, variant="llvm_ad_rgb", **SMALL)
-    assert [m.label for m in result.materials] == ["ball"]
-    assert "note: materials in included file mat.xml (inc (lambert)): left alone (simplify " \
-           "edits the scene file only" in result.summary()
+    assert [m.label for m in result.materials] == ["ball"] and result.included == {}
+    assert "note: materials in included file sub/mat.xml (inc (lambert)): left alone " \
+           "(a file included from another folder that names files relative to it, or by an " \
+           "included file, is not edited" in result.summary()
+    for name in ("m.xml", "o.m.xml"):
+        (tmp_path / name).write_text(MATERIAL_FILE.replace("inc", name))
+    scene = tmp_path / "s.xml"
+    scene.write_text(TINY.replace("CARD", '    <include filename="m.xml"/>\n'
+                                          '    <include filename="o.m.xml"/>\n'))
+    with pytest.raises(MiBrdfsError, match=r"the simplified m.xml would be written to "
+                                           r"o.m.xml, which the scene reads"):
+        simplify(scene, TOLERANCE, output=tmp_path / "o.xml", cache=False)
+    assert not (tmp_path / "o.xml").exists()
+
+
+def test10c_unmerge_puts_each_replacement_back_in_its_file(tmp_path):
+    """merge_includes, locate and unmerge on bytes alone: the materials before, inside and
+    after two included files are found where they are written (file and line, in the labels
+    of unnamed ones), and replacements land in the file each came from, every other byte
+    kept."""
+    from mi_brdfs.simplify.scene import locate, merge_includes, unmerge
+
+    (tmp_path / "a.xml").write_bytes(b'<?xml version="1.0"?>\n<scene version="3.0.0">'
+                                     b'<bsdf type="diffuse"/></scene>\n')
+    (tmp_path / "b.xml").write_bytes(b"<scene>\n<bsdf id='b' type='diffuse'/>\n<!-- b --></scene>")
+    data = (b'<scene version="3.0.0"><bsdf id="m" type="diffuse"/>\n<include filename="a.xml"/>'
+            b'<bsdf id="n" type="diffuse"/><include filename=\'$f\'></include>'
+            b'<bsdf type="diffuse"/></scene>')
+    merged, parts = merge_includes(tmp_path, data, {"f": "b.xml"})
+    materials, _ = scene_bsdfs(merged)
+    locate(materials, parts, data)
+    assert [(m.label, m.file, m.line) for m in materials] == [
+        ("m", None, 1), ("diffuse (line 2 of a.xml)", "a.xml", 2), ("n", None, 2),
+        ("b", "b.xml", 2), ("diffuse (line 2)", None, 2)]
+    new = {(m.start, m.end): f"<bsdf id='{i}' type='X'/>" for i, m in enumerate(materials)}
+    scene, files = unmerge(data, parts, new, {p.file: "new-" + p.file.name for p in parts})
+    assert scene == data.replace(b'id="m" type="diffuse"', b"id='0' type='X'").replace(
+        b'id="n" type="diffuse"', b"id='2' type='X'").replace(
+        b'<bsdf type="diffuse"/>', b"<bsdf id='4' type='X'/>").replace(
+        b'"a.xml"', b'"new-a.xml"').replace(b"'$f'", b"'new-b.xml'")
+    assert {p.name: text for p, text in files.items()} == {
+        "a.xml": (tmp_path / "a.xml").read_bytes().replace(b'<bsdf type="diffuse"/>',
+                                                            b"<bsdf id='1' type='X'/>"),
+        "b.xml": b"<scene>\n<bsdf id='3' type='X'/>\n<!-- b --></scene>"}
+    untouched, none = unmerge(data, parts, {}, {})
+    assert untouched == data and none == {}
 
 
 #: ashikhmin and lafortune in the forms whose candidates differ (test11).
@@ -588,18 +669,7 @@ def test21_simplicity_replaces_by_a_simpler_candidate_not_slower(tmp_path, monke
     the tolerance replaces it when it is not measurably slower, timings noisy around 1
     included (which the speed objective keeps: test07), and the reason says why; twice as
     slow, it does not replace."""
-    from mi_brdfs.simplify import measure
-
-    mi_brdfs.use_variant("llvm_ad_rgb")
-    real = measure._Engine._render
-
-    def faked(self, scene, text, seed, spp):
-        image, seconds = real(self, scene, text, seed, spp)
-        if seed >= 1000:  # the timing repeats (seeds 1000, 1001, ...): original 1 s
-            seconds = 1.0 if text == self.data else ratios[(seed - 1000) % len(ratios)]
-        return image, seconds
-
-    monkeypatch.setattr(measure._Engine, "_render", faked)
+    _fake_timings(monkeypatch, ratios)
     result = simplify(write_scene(tmp_path), TOLERANCE, cache=False, fits=False, repeats=3,
                       **SMALL)
     (ball,) = result.materials

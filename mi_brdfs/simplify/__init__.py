@@ -40,8 +40,11 @@ whose ``type`` is a ``$default`` (a replacement measured for one plugin would be
 another), and plugins of no package, each with its reason. Parameters may take any form
 Mitsuba's XML allows (numbers, ``<rgb>``, ``<spectrum>``, textures, ``<ref>``s, ``$default``
 values); a candidate that needs a value it cannot read (a lobe's albedo, a fit's target) is
-left out, and said so. The materials of ``<include>``d files are left alone (simplify edits the
-scene file only) and named in the notes.
+left out, and said so. The materials of the files the scene ``<include>``s are simplified
+too: such a file with a replaced material is written beside the output scene
+(``OUTPUT-STEM.FILE``, every other byte kept), which includes it instead; a file included from
+another folder that names files itself (whose relative names would resolve elsewhere) or by an
+included file is left alone and named in the notes.
 
 **What is measured, per candidate** (:mod:`.measure`). The scene is rendered with only that
 material replaced (the rest of the XML byte for byte, :mod:`.scene`) at k seeds, as is the

@@ -17,6 +17,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -91,6 +92,22 @@ def default_cache_dir() -> Path:
     return Path(base) / "mi_brdfs" / "simplify"
 
 
+def used_defines(defines: dict, text: bytes, known: tuple = ()) -> dict:
+    """
+    The defines that the scene text references (``$name``): Mitsuba refuses a parameter that
+    nothing uses, and a replaced material (its values substituted) or a merged ``<include>``
+    (its file name resolved) may have held the only reference. Every define while the text
+    includes a file not named in ``known`` (whose text is part of ``text``), which may
+    reference any.
+    """
+    text = re.sub(rb"<!--.*?-->", b"", text, flags=re.S)  # Mitsuba reads no comment
+    names = re.findall(rb"""<include\b[^>]*?filename\s*=\s*["']([^"']*)["']""", text)
+    if any(name.decode("utf-8") not in known for name in names):
+        return dict(defines)
+    return {k: v for k, v in defines.items()
+            if re.search(rb"\$" + re.escape(k.encode("utf-8")) + rb"\b", text)}
+
+
 class _Engine:
     """
     Renders the original and candidate scene texts at the seeds of a seed set, times them
@@ -124,7 +141,7 @@ class _Engine:
         saved = mi.FileResolver(mi.file_resolver())
         mi.file_resolver().prepend(str(self.path.parent))
         try:
-            return mi.load_string(text.decode("utf-8"), **self.defines)
+            return mi.load_string(text.decode("utf-8"), **used_defines(self.defines, text))
         except RuntimeError as e:
             raise MiBrdfsError(mitsuba_error_line(e)) from None
         finally:
@@ -153,7 +170,7 @@ class _Engine:
             with os.fdopen(fd, "wb") as f:
                 f.write(text)
             # a fixed pass size: the same passes (seeds) for every scene
-            result = render(tmp, spp=spp, seed=seed, defines=self.defines,
+            result = render(tmp, spp=spp, seed=seed, defines=used_defines(self.defines, text),
                             pass_spp=max(1, spp // 4), progress=False)
         finally:
             os.unlink(tmp)

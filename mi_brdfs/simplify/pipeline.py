@@ -19,11 +19,11 @@ from .candidates import _cached_fit, candidates_for, kept_reason
 from .choose import OBJECTIVES, _choose, _derive, _predict
 from .measure import (
     CACHE_VERSION, MAX_SEEDS, MIN_REPEATS, _Cache, _Engine, _key, _original_numbers,
-    default_cache_dir,
+    default_cache_dir, used_defines,
 )
 from .report import Candidate, MaterialResult, SimplifyResult, plot, write_report
 from ..scenes import _check_film
-from .scene import element_text, scene_bsdfs, splice
+from .scene import NAMES_FILES, element_text, locate, merge_includes, scene_bsdfs, splice, unmerge
 
 #: Settings (full, quick): spp per seed, timing repeats, seconds per timing render, resolution
 #: of ``--quick`` (through ``-D res=`` where the scene declares that default).
@@ -103,7 +103,7 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
     if objective not in OBJECTIVES:
         raise MiBrdfsError(f"simplify: objective = {objective!r} is invalid: must be one of "
                            f"{', '.join(OBJECTIVES)}")
-    path, data, out, report_dir, materials, scene_defaults, included = \
+    path, (data, source), out, report_dir, materials, scene_defaults, included = \
         _read(scene, output, report, defines)
     variant = _use_variant(variant)
     defines, notes = _defines(path, defines, scene_defaults, quick)
@@ -143,6 +143,7 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
                             original=ref_numbers, replacements=replacements, text=text,
                             verification=verification, predicted=predicted, measured=measured,
                             notes=notes, renders=engine.renders, objective=objective)
+    result.text, result.included = _split(result, source, out)
     if out is not None:
         _write_scene(result, out)
     result.seconds = time.perf_counter() - clock
@@ -154,8 +155,11 @@ def simplify(scene, tolerance: float = 0.01, *, variant: str | None = None, outp
 
 def _read(scene, output, report, defines) -> tuple:
     """
-    (path, bytes, output path or None, report folder or None, materials, ``<default>`` values,
-    notes on the materials of included files) of the scene, each checked before any work.
+    (path, (bytes, source), output path or None, report folder or None, materials,
+    ``<default>`` values, notes on the materials of included files left alone) of the scene,
+    each checked before any work. The bytes are the scene's with the files it includes merged
+    in (:func:`~.scene.merge_includes`); source is (the scene file's own
+    bytes, those files' :class:`~.scene.Part` records).
     """
     from ..imageio import check_writable
     from ..scenes import scene_path, scene_text
@@ -177,14 +181,18 @@ def _read(scene, output, report, defines) -> tuple:
         raise MiBrdfsError(f"simplify: the output {out} is the scene itself: write the "
                            f"simplified scene to another file")
     report_dir = _report_dir(report)
-    materials, scene_defaults = scene_bsdfs(data)
-    values = dict(scene_defaults, **{k: str(v) for k, v in (defines or {}).items()})
-    included = _included(path, data, values)
+    values = dict(scene_bsdfs(data)[1], **{k: str(v) for k, v in (defines or {}).items()})
+    merged, parts = merge_includes(path.parent, data, values)
+    materials, scene_defaults = scene_bsdfs(merged)
+    locate(materials, parts, data)
+    if out is not None:
+        _check_included_names(path, out, parts)
+    included = _included(path, merged, values, {path.resolve(), *(p.file for p in parts)})
     if not materials:
         raise MiBrdfsError(f"{path.name} has no <bsdf>: nothing to simplify" if not included
                            else f"{path.name} has no <bsdf> of its own, nothing to simplify: "
                                 f"{'; '.join(included)}")
-    return path, data, out, report_dir, materials, scene_defaults, included
+    return path, (merged, (data, parts)), out, report_dir, materials, scene_defaults, included
 
 
 def _included(path: Path, data: bytes, values: dict, seen: set | None = None) -> list[str]:
@@ -213,7 +221,8 @@ def _included(path: Path, data: bytes, values: dict, seen: set | None = None) ->
         if found:
             listed = ", ".join(f"{m.label} ({m.type})" for m in found if m.parent is None)
             notes.append(f"materials in included file {name} ({listed}): left alone "
-                         f"(simplify edits the scene file only; copy them into "
+                         f"(a file included from another folder that names files relative "
+                         f"to it, or by an included file, is not edited; copy them into "
                          f"{path.name} to simplify them)")
         notes += _included(file, text, values, seen)
     return notes
@@ -393,18 +402,52 @@ def _verify(results: list, data: bytes, engine: _Engine, ref_numbers: dict, tole
     return verification, replacements, text, predicted
 
 
+def _included_name(path: Path, out: Path | None, part) -> str:
+    """The file name of a simplified included file: beside the output scene (or, with none,
+    the name it would have beside the scene's ``-simplified`` file), prefixed by its stem."""
+    stem = out.stem if out is not None else f"{path.stem}-simplified"
+    return f"{stem}.{part.file.name}"
+
+
+def _check_included_names(path: Path, out: Path, parts: list) -> None:
+    """No simplified included file may overwrite the scene or a file it includes."""
+    originals = {path.resolve(), *(p.file for p in parts)}
+    for part in parts:
+        target = (out.parent / _included_name(path, out, part)).resolve()
+        if target in originals:
+            raise MiBrdfsError(f"simplify: the simplified {part.name} would be written to "
+                               f"{target.name}, which the scene reads: name the output "
+                               f"scene otherwise")
+
+
+def _split(result: SimplifyResult, source: tuple, out: Path | None) -> tuple:
+    """(the simplified scene file's bytes, {file name: bytes} of each included file with a
+    replacement, which it then includes instead)."""
+    data, parts = source
+    names = {p.file: _included_name(result.scene, out, p) for p in parts}
+    text, included = unmerge(data, parts, result.replacements, names)
+    return text, {names[part.file]: content for part, content in included.items()}
+
+
 def _write_scene(result: SimplifyResult, out: Path) -> None:
-    """Write the simplified scene atomically and check that it loads."""
+    """Write the simplified included files, then the scene, each atomically, and check that
+    the scene loads."""
     from ..imageio import atomic_path
     from ..scenes import load_scene
 
+    for name, content in result.included.items():
+        with atomic_path(out.parent / name, ".xml") as tmp:
+            Path(tmp).write_bytes(content)
     with atomic_path(out, ".xml") as tmp:
         Path(tmp).write_bytes(result.text)
     result.output = out
-    if out.parent.resolve() != result.scene.parent.resolve() and \
-            re.search(rb'name="filename"|<include\b', result.text):
+    own = re.sub(rb"<include\b[^>]*>", lambda m: b"" if any(
+        name.encode("utf-8") in m.group(0) for name in result.included) else m.group(0),
+        result.text)  # the included files written beside it resolve there
+    if out.parent.resolve() != result.scene.parent.resolve() and re.search(NAMES_FILES, own):
         result.notes.append(f"{out} lies in another folder than {result.scene.name}, whose "
                             f"relative file names (meshes, textures, included files) then "
                             f"resolve elsewhere")
         return
-    load_scene(out, result.defines)
+    scene_text = result.text + b"".join(result.included.values())
+    load_scene(out, used_defines(result.defines, scene_text, tuple(result.included)))

@@ -60,7 +60,8 @@ class MaterialResult:
 
 @dataclass
 class SimplifyResult:
-    """What :func:`simplify` measured and chose; ``text`` is the simplified scene file."""
+    """What :func:`simplify` measured and chose; ``text`` is the simplified scene file, and
+    ``included`` the included files it simplified (which ``text`` includes)."""
 
     scene: Path
     tolerance: float
@@ -82,6 +83,8 @@ class SimplifyResult:
     notes: list = field(default_factory=list)
     renders: int = 0
     objective: str = "simplicity"
+    #: {file name: bytes} of each simplified included file, written beside the scene file
+    included: dict = field(default_factory=dict)
 
     def table(self, material: MaterialResult) -> str:
         """A Markdown table of one material's candidates."""
@@ -114,7 +117,8 @@ class SimplifyResult:
     def tables(self) -> str:
         parts = []
         for mat in self.materials:
-            where = "" if "(line" in mat.label else f", line {mat.material.line}"
+            where = "" if "(line" in mat.label else f", line {mat.material.line}" + (
+                f" of {mat.material.file}" if mat.material.file else "")
             head = f"### {mat.label} (`{mat.material.type}`{where})"
             if len(mat.candidates) == 1:
                 parts += [head, "", f"kept: {mat.reason}", ""]
@@ -155,7 +159,8 @@ class SimplifyResult:
                 f"{_ratio(me['cost_ratio'], me['cost_ratio_se'])}, variance "
                 f"{_ratio(me['variance_ratio'], me['variance_ratio_se'])})")
         if self.output:
-            lines.append(f"wrote {self.output}")
+            lines.append(f"wrote {self.output}" + "".join(
+                f" and {self.output.parent / name}" for name in self.included))
         if self.report:
             lines.append(f"wrote {self.report}" + (f" and {self.figure}" if self.figure else ""))
         return lines
