@@ -520,6 +520,25 @@ def test10c_unmerge_puts_each_replacement_back_in_its_file(tmp_path):
     assert untouched == data and none == {}
 
 
+def test10d_a_define_the_replacement_no_longer_references(tmp_path):
+    """-D e=30 for a phong's exponent: its replacement (the glossy lobe left out: a diffuse)
+    references $e no more, which Mitsuba refuses as an unused parameter: the candidate was
+    'not measured' (and an output with it failed to load, 'declares no <default> for e')."""
+    scene = tmp_path / "phong.xml"
+    scene.write_text(TINY.replace("CARD", "").replace(
+        '<default name="res" value="24"/>', '<default name="res" value="24"/>'
+        '<default name="e" value="20"/>').replace(
+        '<bsdf type="lambert" id="ball">\n        <rgb name="reflectance" value="0.2, 0.5, 0.7"/>',
+        '<bsdf type="phong" id="ball"><rgb name="diffuse_reflectance" value="0.2, 0.5, 0.7"/>'
+        '<float name="specular_reflectance" value="0.002"/><float name="exponent" value="$e"/>'))
+    out = tmp_path / "out.xml"
+    result = simplify(scene, TOLERANCE, output=out, cache=False, fits=False,
+                      variant="llvm_ad_rgb", **dict(SMALL, defines={"res": "16", "e": "30"}))
+    (ball,) = result.materials
+    assert ball.candidates[ball.chosen].kind != "original", result.summary()
+    assert "$e" not in out.read_text() and result.output == out
+
+
 #: ashikhmin and lafortune in the forms whose candidates differ (test11).
 LOBES = b"""<scene version="3.0.0">
     <bsdf type="ashikhmin" id="ash_glossy">
