@@ -23,6 +23,22 @@ import mitsuba as mi
 from . import _env
 from .errors import MiBrdfsError, MiBrdfsWarning
 
+
+def quiet_drjit_syntax() -> None:
+    """
+    Silence drjit's warning that @dr.syntax was called more than 1000 times, that alone.
+    Mitsuba decorates the methods of its differentiable integrators with it each time a JIT
+    variant is set (mitsuba/python/ad/integrators/prb.py and others: 7 per switch in 3.9.1), so
+    a process that switches variants about 140 times (an audit, a test session) is told to move
+    a decorator of its own out of a loop, though it decorates nothing. Called at import, and by
+    the command line, whose caller may have reset the filters (pytest does per test).
+    """
+    warnings.filterwarnings("ignore", message=r"The AST-transforming decorator @drjit\.syntax "
+                            r"was called more than 1000 times", category=RuntimeWarning)
+
+
+quiet_drjit_syntax()
+
 #: Plugin id -> (module, name of the plugin class it defines).
 PLUGINS = {
     "lambert": ("mi_brdfs.plugins.lambert", "Lambert"),

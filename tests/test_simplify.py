@@ -296,6 +296,18 @@ def test05_bad_input_one_line_exit_2(tmp_path, tmp_path_factory, monkeypatch, ar
     assert not (xdg / "mi_brdfs" / "simplify").exists()  # no cache either
 
 
+def test05b_one_line_after_many_variant_switches(tmp_path, monkeypatch):
+    """drjit's warning after 1000 @dr.syntax decorations (Mitsuba's, at every JIT variant
+    switch) once came out in the middle of a test session as a second line: the command line
+    silences it (registry.quiet_drjit_syntax), even where the caller reset the filters."""
+    import drjit.ast
+
+    mi_brdfs.use_variant("scalar_rgb")  # the command switches to llvm_ad_rgb and back
+    monkeypatch.setattr(drjit.ast, "_syntax_counter", 1000)
+    cli_one_line_error(["simplify", str(write_scene(tmp_path)), "-D", "res=0"],
+                       "tiny.xml: the film's width is 0")
+
+
 @pytest.mark.parametrize("tolerance", [0, -1, math.nan, math.inf, "0.01", True])
 def test06_api_tolerance(tmp_path, tolerance):
     with pytest.raises(MiBrdfsError, match=r"tolerance .* is invalid: must lie in \(0, 1\)"):

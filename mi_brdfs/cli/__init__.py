@@ -32,6 +32,8 @@ def main(argv: list[str] | None = None) -> int:
     except ImportError as e:
         print(f"mi-brdfs: error: {e}", file=sys.stderr)
         return EXIT_USER_ERROR
+    from ..registry import quiet_drjit_syntax
+    quiet_drjit_syntax()
     from ..variants import variant_kept
 
     try:

@@ -121,3 +121,32 @@ def test08_plugin_classes_live_at_module_level_per_variant():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "OK" in proc.stdout
+
+
+
+def test09_switching_variants_does_not_warn_of_drjit_syntax(monkeypatch):
+    """Mitsuba re-decorates its integrators with @dr.syntax at every JIT variant switch, and
+    drjit warns after 1000 decorations to move a decorator out of a loop: a test session or
+    an audit crossed it, and the warning broke the command line's one-line output. With the
+    count set just below 1000, a switch warns (pytest resets the filters per test) until
+    registry.quiet_drjit_syntax() is called, as the package's import and the CLI do."""
+    import warnings
+
+    import drjit.ast
+
+    from mi_brdfs.registry import quiet_drjit_syntax
+
+    if not LLVM_OK:
+        pytest.skip("needs the llvm variants")
+    before = mi.variant()
+    for quiet in (False, True):
+        monkeypatch.setattr(drjit.ast, "_syntax_counter", 1000)
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            if quiet:
+                quiet_drjit_syntax()
+            for variant in ("llvm_ad_mono", "llvm_ad_rgb"):
+                mi.set_variant(variant)
+        found = any("@drjit.syntax" in str(w.message) for w in seen)
+        assert found is not quiet, [str(w.message) for w in seen]
+    mi.set_variant(before or "llvm_ad_rgb")
