@@ -75,6 +75,24 @@ def scene_text(path: Path) -> str:
     return text
 
 
+def used_defines(defines: dict, text: bytes, known: tuple = ()) -> dict:
+    """
+    The defines but those of a ``<default>`` that the scene text no longer references
+    (``$name``): Mitsuba refuses a parameter that nothing uses, and a swapped or replaced
+    material (its values substituted) or a merged ``<include>`` (its file name resolved) may
+    have held the only reference. A define the scene does not declare is kept, for Mitsuba to
+    refuse; so is every define while the text includes a file not named in ``known`` (whose
+    text is part of ``text``), which may reference any.
+    """
+    text = re.sub(rb"<!--.*?-->", b"", text, flags=re.S)  # Mitsuba reads no comment
+    names = re.findall(rb"""<include\b[^>]*?filename\s*=\s*["']([^"']*)["']""", text)
+    if any(name.decode("utf-8") not in known for name in names):
+        return dict(defines)
+    declared = set(re.findall(rb"""<default\b[^>]*?name\s*=\s*["']([^"']*)["']""", text))
+    return {k: v for k, v in defines.items() if k.encode("utf-8") not in declared
+            or re.search(rb"\$" + re.escape(k.encode("utf-8")) + rb"\b", text)}
+
+
 def load_scene(path: str | os.PathLike, defines: dict | None = None, bsdfs: dict | None = None,
                **kwargs):
     """
@@ -103,7 +121,7 @@ def load_scene(path: str | os.PathLike, defines: dict | None = None, bsdfs: dict
             saved = mi.FileResolver(mi.file_resolver())
             mi.file_resolver().prepend(str(path.parent))
             try:
-                scene = mi.load_string(xml, **params)
+                scene = mi.load_string(xml, **used_defines(params, xml.encode("utf-8")))
             finally:
                 mi.set_file_resolver(saved)
     except RuntimeError as e:

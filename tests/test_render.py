@@ -215,3 +215,19 @@ def test_a_bsdf_of_an_included_file_is_swapped(variant_scalar_rgb, tmp_path):
     assert type(scene.shapes()[0].bsdf()).__name__ == "Lambert"
     with pytest.raises(MiBrdfsError, match='no <bsdf id="wood">'):
         load_scene(tmp_path / "main.xml", bsdfs={"wood": {"type": "lambert"}})
+
+
+def test_a_define_only_the_swapped_bsdf_referenced(variant_scalar_rgb, tmp_path):
+    """-D e=30 for the exponent of the material that compare --swap replaces: nothing
+    references $e any more, which Mitsuba refuses ('declares no <default> for e'); the define
+    is dropped, while one the scene does not declare is still refused."""
+    (tmp_path / "main.xml").write_text(
+        '<scene version="3.0.0"><default name="e" value="20"/><integrator type="path"/>'
+        '<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>'
+        '<integer name="height" value="4"/></film></sensor><emitter type="constant"/>'
+        '<shape type="sphere"><bsdf type="phong" id="ball"><float name="exponent" '
+        'value="$e"/></bsdf></shape></scene>')
+    scene = load_scene(tmp_path / "main.xml", {"e": "30"}, bsdfs={"ball": "diffuse"})
+    assert "SmoothDiffuse" in str(scene.shapes()[0].bsdf())
+    with pytest.raises(MiBrdfsError, match="declares no <default> for f"):
+        load_scene(tmp_path / "main.xml", {"f": "30"}, bsdfs={"ball": "diffuse"})

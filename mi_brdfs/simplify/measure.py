@@ -17,13 +17,13 @@ import hashlib
 import json
 import math
 import os
-import re
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MiBrdfsError, mitsuba_error_line
+from ..scenes import used_defines
 
 #: The most seeds rendered per scene while its bias is inconclusive (2, 4, 8, 16).
 MAX_SEEDS = 16
@@ -90,22 +90,6 @@ class _Cache:
 def default_cache_dir() -> Path:
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "mi_brdfs" / "simplify"
-
-
-def used_defines(defines: dict, text: bytes, known: tuple = ()) -> dict:
-    """
-    The defines that the scene text references (``$name``): Mitsuba refuses a parameter that
-    nothing uses, and a replaced material (its values substituted) or a merged ``<include>``
-    (its file name resolved) may have held the only reference. Every define while the text
-    includes a file not named in ``known`` (whose text is part of ``text``), which may
-    reference any.
-    """
-    text = re.sub(rb"<!--.*?-->", b"", text, flags=re.S)  # Mitsuba reads no comment
-    names = re.findall(rb"""<include\b[^>]*?filename\s*=\s*["']([^"']*)["']""", text)
-    if any(name.decode("utf-8") not in known for name in names):
-        return dict(defines)
-    return {k: v for k, v in defines.items()
-            if re.search(rb"\$" + re.escape(k.encode("utf-8")) + rb"\b", text)}
 
 
 class _Engine:

@@ -19,10 +19,10 @@ from .candidates import _cached_fit, candidates_for, kept_reason
 from .choose import OBJECTIVES, _choose, _derive, _predict
 from .measure import (
     CACHE_VERSION, MAX_SEEDS, MIN_REPEATS, _Cache, _Engine, _key, _original_numbers,
-    default_cache_dir, used_defines,
+    default_cache_dir,
 )
 from .report import Candidate, MaterialResult, SimplifyResult, plot, write_report
-from ..scenes import _check_film
+from ..scenes import _check_film, used_defines
 from .scene import NAMES_FILES, element_text, locate, merge_includes, scene_bsdfs, splice, unmerge
 
 #: Settings (full, quick): spp per seed, timing repeats, seconds per timing render, resolution
