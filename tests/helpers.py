@@ -1,6 +1,9 @@
 """Helpers shared by the tests: the library's batch layer, under the names the tests use."""
 
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 
@@ -62,6 +65,17 @@ def eval_gradient(bsdf, key, value, step, wi, wo):
     grad = float(np.array(dr.grad(params[key]))[0])
     finite = (float(total(value + step)[0]) - float(total(value - step)[0])) / (2 * step)
     return grad, finite
+
+
+#: The command line as a user runs it, in a subprocess.
+CLI = [sys.executable, "-m", "mi_brdfs"]
+
+
+def run(*args, env=None, cwd=None, timeout=120):
+    """``mi-brdfs args`` in a subprocess (no progress bars): the CompletedProcess."""
+    full_env = dict(os.environ, MI_BRDFS_NO_PROGRESS="1", **(env or {}))
+    return subprocess.run(CLI + list(args), capture_output=True, text=True, env=full_env,
+                          cwd=cwd, timeout=timeout)
 
 
 def cli_one_line_error(args, message):

@@ -5,7 +5,7 @@ import pytest
 
 from mi_brdfs import compare as C
 from mi_brdfs.imageio import read_exr
-from test_cli import run
+from helpers import run
 
 WHITE = "lambert reflectance=0.885809,0.698859,0.666422"  # cbox's white, as lambert
 

@@ -15,13 +15,7 @@ import pytest
 from conftest import LLVM_OK
 from mi_brdfs.imageio import read_exr
 
-CLI = [sys.executable, "-m", "mi_brdfs"]
-
-
-def run(*args, env=None, cwd=None, timeout=120):
-    full_env = dict(os.environ, MI_BRDFS_NO_PROGRESS="1", **(env or {}))
-    return subprocess.run(CLI + list(args), capture_output=True, text=True, env=full_env,
-                          cwd=cwd, timeout=timeout)
+from helpers import CLI, run
 
 
 @pytest.mark.parametrize("variant", ["scalar_rgb", "llvm_ad_rgb"])

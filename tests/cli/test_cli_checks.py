@@ -10,7 +10,7 @@ from broken import register_broken
 from helpers import cli_one_line_error
 from mi_brdfs.cli import main
 from mi_brdfs.imageio import read_exr
-from test_cli import run
+from helpers import run
 
 
 def test01_check_passes_on_builtin_and_ours(capsys):
