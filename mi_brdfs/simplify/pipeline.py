@@ -198,7 +198,8 @@ def _read(scene, output, report, defines) -> tuple:
 def _included(path: Path, data: bytes, values: dict, seen: set | None = None) -> list[str]:
     """
     A note for each file the scene ``<include>``s (and they include) that holds a ``<bsdf>``,
-    or that cannot be read: simplify edits the scene file only, and says what it leaves alone.
+    or that cannot be read, but those of ``seen`` (the scene and the files merged into it):
+    simplify says what it leaves alone.
     """
     from .scene import includes
 

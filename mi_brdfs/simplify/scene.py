@@ -119,15 +119,7 @@ def scene_bsdfs(data: bytes) -> tuple[list[Material], dict]:
 
 def includes(data: bytes) -> list[str]:
     """The ``filename`` of every ``<include>`` of the scene file's bytes, in document order."""
-    parser = expat.ParserCreate()
-    found: list[str] = []
-    parser.StartElementHandler = lambda name, attrs: found.append(attrs.get("filename", "")) \
-        if name == "include" else None
-    try:
-        parser.Parse(data, True)
-    except expat.ExpatError as e:
-        raise MiBrdfsError(f"the scene is not valid XML: {e}") from None
-    return found
+    return [attrs.get("filename", "") for _, _, attrs, _, _ in _element_spans(data, "include")]
 
 
 #: XML that names a file (a ``filename`` property, an ``<include>``), relative to its folder.
@@ -148,6 +140,11 @@ class Part:
     @property
     def length(self) -> int:
         return self.content[1] - self.content[0]
+
+    @property
+    def growth(self) -> int:
+        """How many bytes longer the merged bytes are for it than the scene file."""
+        return self.length - (self.span[1] - self.span[0])
 
 
 def _element_spans(data: bytes, tag: str, depth: int | None = None) -> list[tuple]:
@@ -207,7 +204,7 @@ def merge_includes(folder: Path, data: bytes, values: dict) -> tuple[bytes, list
     shift = 0
     for part in parts:
         part.at = part.span[0] + shift
-        shift += part.length - (part.span[1] - part.span[0])
+        shift += part.growth
     return splice(data, {p.span: p.data[slice(*p.content)] for p in parts}), parts
 
 
@@ -225,7 +222,7 @@ def unmerge(data: bytes, parts: list[Part], replacements: dict, names: dict) -> 
             offset = part.content[0] - part.at
             theirs.setdefault(part, {})[(start + offset, end + offset)] = text
         else:
-            shift = sum(p.length - (p.span[1] - p.span[0]) for p in parts
+            shift = sum(p.growth for p in parts
                         if p.at + p.length <= start)
             own[(start - shift, end - shift)] = text
     for part in theirs:
@@ -242,7 +239,7 @@ def _where(parts: list[Part], data: bytes, offset: int) -> tuple:
     for p in parts:
         if p.at <= offset < p.at + p.length:
             return p.name, p.data.count(b"\n", 0, offset - p.at + p.content[0]) + 1
-    shift = sum(p.length - (p.span[1] - p.span[0]) for p in parts if p.at + p.length <= offset)
+    shift = sum(p.growth for p in parts if p.at + p.length <= offset)
     return None, data.count(b"\n", 0, offset - shift) + 1
 
 
