@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import platform
+import re
 from collections import Counter, defaultdict
 from pathlib import Path
 
@@ -231,7 +232,8 @@ def _finding_sections(records: list[dict], items: list[dict], table,
             continue
         lines += [f"## {title}", ""]
         for f in chosen:
-            lines += [f"### `{f.bsdf}`: {f.check.strip('^$')} ({len(by_finding[f])} records)",
+            checks = " or ".join(re.sub(r"[()^$]", "", f.check).split("|"))
+            lines += [f"### `{f.bsdf}`: {checks} ({len(by_finding[f])} records)",
                       "", f.summary, ""]
             if f.reproducer:
                 lines.append(f"- Reproducer: [`{f.reproducer}`](../{f.reproducer}) "

@@ -71,6 +71,11 @@ def test02_report(tmp_path):
     text = md.read_text()
     assert "**defect** ⁺" in text and "Fixed upstream: https://example.org/pull/1" in text
     assert json.loads(js.read_text())[1]["fixed_upstream"].startswith("https://example.org")
+    # a finding's heading names its checks in words, not as its regular expression
+    words = [Finding("roughplastic", r"^(chi2 θ=0°|lobes)$", "", "defect", "why", "validation/x.py")]
+    md, _, _ = report.write(records, tmp_path, "mi-brdfs audit", 60.0, "llvm_ad_rgb",
+                            quick=False, table=words)
+    assert "### `roughplastic`: chi2 θ=0° or lobes (1 records)" in md.read_text()
 
 
 def test02b_variants_and_cuda():
