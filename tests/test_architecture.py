@@ -31,8 +31,8 @@ def layers_of(page_text: str) -> list[tuple[str, list[str]]]:
 def _matches(module: str, entry: str) -> bool:
     """Whether the module (dotted, under ``mi_brdfs``) is the table's ``entry``."""
     path = module.split(".")[1:]
-    if entry == "__init__.py":
-        return path == []
+    if entry.endswith("__init__.py"):  # a package's own module ("__init__.py": the root)
+        return path == entry.split("/")[:-1]
     if entry.endswith("/"):
         package = entry.rstrip("/").split("/")
         return path[:len(package)] == package

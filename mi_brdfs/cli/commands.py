@@ -403,6 +403,27 @@ def cmd_bench(args) -> int:
     return 0  # a benchmark reports targets met or missed; it does not fail
 
 
+def cmd_measure(args) -> int:
+    import numpy as np
+
+    from ..errors import MiBrdfsError
+    from ..imageio import check_writable
+    from ..measured.tabulate import measure
+
+    from ..registry import use_variant
+
+    out = check_writable(args.output)
+    use_variant(args.variant or "llvm_ad_rgb", fallback=False)
+    specs = _bsdfs(args.bsdf)
+    if len(specs) != 1:
+        raise MiBrdfsError(f"measure: {len(specs)} BSDFs given; give one")
+    values = measure(specs[0], out, variant=args.variant)
+    measured = int(np.count_nonzero(~np.isnan(values[0])))
+    print(f"wrote {out}: {measured} of {values[0].size} bins measured (the others below the "
+          f"horizon), f up to {np.nanmax(values):.4g}")
+    return 0
+
+
 def cmd_tables(args) -> int:
     from .. import albedo_tables as tables
     from ..progress import Progress

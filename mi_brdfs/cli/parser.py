@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .commands import (
     EXIT_USER_ERROR, cmd_audit, cmd_bench, cmd_check, cmd_compare, cmd_fit, cmd_furnace, cmd_info,
-    cmd_plot, cmd_render, cmd_simplify, cmd_tables, cmd_validate,
+    cmd_measure, cmd_plot, cmd_render, cmd_simplify, cmd_tables, cmd_validate,
 )
 
 
@@ -100,6 +100,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_bench(sub)
     _add_audit(sub)
     _add_tables(sub)
+    _add_measure(sub)
     _add_info(sub)
     return parser
 
@@ -390,6 +391,18 @@ def _add_tables(sub) -> None:
                    help="an N x N grid of samples per node (default: 512 for the "
                         "conductor's tables, 256 for the dielectric's)")
     t.set_defaults(func=cmd_tables)
+
+
+def _add_measure(sub) -> None:
+    """``mi-brdfs measure``."""
+    m = _bsdf_command(sub, "measure", "tabulate a BSDF in MERL's .binary format",
+                      "A virtual gonioreflectometer: the BRDF f = eval/cosθo at the centre of "
+                      "every bin of MERL's format (Matusik et al. 2003: 90 θh x 90 θd x 180 φd, "
+                      "red, green, blue), the bins below the horizon unmeasured, written as a "
+                      ".binary file that the tools reading MERL's data read.")
+    m.add_argument("-o", "--output", required=True, type=_output(".binary"),
+                   metavar="FILE.binary", help="where to write it")
+    m.set_defaults(func=cmd_measure)
 
 
 def _add_info(sub) -> None:

@@ -1,0 +1,63 @@
+"""
+A virtual gonioreflectometer: any BSDF (these plugins, Mitsuba's built-ins, a user's) tabulated
+in MERL's format (:mod:`.merl`), so that every step from measured data to a fit can be tested
+against a known answer, and MERL-format data of any BSDF handed to the tools that read it.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from ..errors import MiBrdfsError, MiBrdfsWarning
+from ..variants import keeps_variant
+from . import merl
+
+
+def bin_directions() -> tuple[np.ndarray, np.ndarray]:
+    """(ωi, ωo), each ``(90·90·180, 3)``: the pair at the centre of every MERL bin, with φh = 0
+    (the format is isotropic), in the bins' order."""
+    theta_h, theta_d, phi_d = (a.ravel() for a in merl.bin_centres())
+    return merl.directions(theta_h, 0.0, theta_d, phi_d)
+
+
+@keeps_variant
+def measure(bsdf, path=None, variant: str | None = None) -> np.ndarray:
+    """
+    The BRDF f of ``bsdf`` (any form of :mod:`mi_brdfs.bsdfspec`) at the centre of every MERL
+    bin, ``(3, 90, 90, 180)``, NaN where either direction lies below the horizon (unmeasured, as
+    in MERL's files); written to ``path`` (a ``.binary`` file) when given.
+
+    Measured in ``variant`` (an RGB JIT variant; default: the current one if it is such a
+    variant, else ``llvm_ad_rgb``), f = eval/cosθo. A
+    BSDF with the Anisotropic flag is measured at φh = 0 only, and a warning says so.
+    """
+    import mitsuba as mi
+
+    from ..bsdfspec import load_bsdf
+    from ..checks.batch import evaluate
+    from ..registry import use_variant
+
+    if path is not None and not str(path).endswith(".binary"):
+        raise MiBrdfsError(f"measure: the output {path} must end in .binary (MERL's format)")
+    jit_rgb = mi.variant() is not None and mi.is_rgb and not mi.is_polarized \
+        and mi.variant().startswith(("llvm", "cuda"))
+    if variant is not None or not jit_rgb:
+        use_variant(variant or "llvm_ad_rgb", fallback=False)
+    if not (mi.is_rgb and not mi.is_polarized and mi.variant().startswith(("llvm", "cuda"))):
+        raise MiBrdfsError(f"measure needs an RGB JIT variant (llvm_ad_rgb, cuda_ad_rgb), not "
+                           f"{mi.variant()}: MERL's format holds red, green and blue")
+    loaded = load_bsdf(bsdf)
+    if loaded.flags() & mi.BSDFFlags.Anisotropic:
+        warnings.warn("measure: the BSDF is anisotropic and MERL's format isotropic: it is "
+                      "measured at φh = 0 only", MiBrdfsWarning, stacklevel=3)
+    wi, wo = bin_directions()
+    below = (wi[:, 2] <= 0.0) | (wo[:, 2] <= 0.0)
+    value = evaluate(loaded, wi, wo).value
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = np.where(below[:, None], np.nan, value / wo[:, 2:3])
+    values = np.moveaxis(f.reshape(merl.RES + (3,)), -1, 0)
+    if path is not None:
+        merl.write(path, values)
+    return values

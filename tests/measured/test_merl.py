@@ -1,0 +1,162 @@
+"""
+MERL's format (mi_brdfs.measured.merl) and the virtual gonioreflectometer
+(mi_brdfs.measured.tabulate): the half/difference angles against closed forms, the bins as
+MERL's reader computes them, the file's bytes read directly, one-line errors for bad files, and
+tabulated BSDFs against their own evaluation.
+"""
+
+import numpy as np
+import pytest
+
+from helpers import cli_one_line_error, run
+from mi_brdfs.errors import MiBrdfsError
+from mi_brdfs.measured import merl
+from mi_brdfs.measured.tabulate import bin_directions, measure
+
+
+def _unit(theta, phi):
+    return np.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
+
+
+def test01_half_diff_closed_forms():
+    """Mirror pair: θh = 0, θd = θi, φd = 0 (the difference vector is ωi). Normal incidence
+    and ωo at θ: h halfway, θh = θd = θ/2, φd = π (ωi leans away from h). Rotating both
+    directions about the normal changes φh alone."""
+    a = 0.7
+    mirror = np.array([-np.sin(a), 0.0, np.cos(a)])  # h exactly the normal, φh = atan2(0, 0)
+    th, ph, td, pd = merl.half_diff(_unit(a, 0.0)[None], mirror[None])
+    assert np.allclose([th[0], td[0], pd[0]], [0.0, a, 0.0], atol=1e-12)
+    b = 1.1
+    th, ph, td, pd = merl.half_diff(_unit(0.0, 0.0)[None], _unit(b, 0.0)[None])
+    assert np.allclose([th[0], ph[0], td[0], abs(pd[0])], [b / 2, 0.0, b / 2, np.pi], atol=1e-12)
+    rng = np.random.default_rng(1)
+    wi, wo = _unit(rng.random(50), 6 * rng.random(50)).T, _unit(rng.random(50), 6 * rng.random(50)).T
+    rot = 0.9
+    c, s = np.cos(rot), np.sin(rot)
+    turn = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    before, after = merl.half_diff(wi, wo), merl.half_diff(wi @ turn.T, wo @ turn.T)
+    for k in (0, 2, 3):
+        assert np.allclose(before[k], after[k], atol=1e-9)
+    assert np.allclose(np.angle(np.exp(1j * (after[1] - before[1]))), rot, atol=1e-9)
+
+
+def test02_directions_invert_half_diff():
+    rng = np.random.default_rng(2)
+    n = 1000
+    angles = (rng.random(n) * np.pi / 2, rng.uniform(-np.pi, np.pi, n),
+              rng.random(n) * np.pi / 2, rng.uniform(-np.pi, np.pi, n))
+    wi, wo = merl.directions(*angles)
+    assert np.allclose(np.linalg.norm(wi, axis=1), 1) and np.allclose(np.linalg.norm(wo, axis=1), 1)
+    back = merl.half_diff(wi, wo)
+    for got, want in zip(back, angles):
+        assert np.allclose(np.angle(np.exp(1j * (got - want))), 0.0, atol=1e-7)
+
+
+def test03_bins_as_merl_reader():
+    """θh by its square root, θd linearly, φd folded into [0, π), each clamped (values worked
+    out by hand from the reader's formulas)."""
+    half_pi = np.pi / 2
+    i, j, k = merl.indices(np.array([0.0, half_pi * (10.5 / 90) ** 2, half_pi, -1e-9]),
+                           np.array([0.0, np.pi / 4 + 1e-9, half_pi, 0.0]),
+                           np.array([0.0, -half_pi + 1e-9, np.pi, -1e-9]))
+    assert i.tolist() == [0, 10, 89, 0]
+    assert j.tolist() == [0, 45, 89, 0]
+    assert k.tolist() == [0, 90, 179, 179]
+    # every bin centre falls in its own bin
+    th, td, pd = merl.bin_centres()
+    got = merl.indices(th, td, pd)
+    want = np.indices(merl.RES)
+    assert all(np.array_equal(g, w) for g, w in zip(got, want))
+
+
+def test04_file_bytes_and_round_trip(tmp_path):
+    """The header and the stored values read directly from the bytes: channel c of bin
+    (i, j, k) at 3 + ... (red, green, blue blocks), divided by MERL's scales; unmeasured -1.
+    A writer with a channel's scale wrong, or the θd and φd axes transposed, fails here."""
+    rng = np.random.default_rng(3)
+    values = rng.random((3,) + merl.RES)
+    values[:, 5, 6, 7] = np.nan
+    path = tmp_path / "x.binary"
+    merl.write(path, values)
+    data = path.read_bytes()
+    assert len(data) == merl.SIZE
+    assert np.frombuffer(data[:12], "<i4").tolist() == [90, 90, 180]
+    raw = np.frombuffer(data[12:], "<f8")
+    block = 90 * 90 * 180
+    for c, scale in enumerate((1 / 1500, 1.15 / 1500, 1.66 / 1500)):
+        index = c * block + 12 * 180 * 90 + 34 * 180 + 56  # θh 12, θd 34, φd 56
+        assert raw[index] == pytest.approx(values[c, 12, 34, 56] / scale, rel=1e-15)
+        assert raw[c * block + 5 * 180 * 90 + 6 * 180 + 7] == -1.0
+    back = merl.read(path)
+    assert np.array_equal(np.isnan(back), np.isnan(values))
+    assert np.allclose(back[~np.isnan(back)], values[~np.isnan(values)], rtol=1e-15)
+
+
+@pytest.mark.parametrize("content,message", [
+    (None, "cannot read the MERL file"),
+    (b"\x01\x02", "2 bytes, too short for a MERL file"),
+    (np.array([90, 90, 360], "<i4").tobytes() + b"\0" * 64, "dimensions (90, 90, 360), not "
+                                                             "MERL's (90, 90, 180)"),
+    (np.array([90, 90, 180], "<i4").tobytes() + b"\0" * 64, "76 bytes where a MERL file has "
+                                                            "34992012"),
+])
+def test05_bad_files_are_one_line(tmp_path, content, message):
+    path = tmp_path / "bad.binary"
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(MiBrdfsError, match="bad.binary: ") as e:
+        merl.read(path)
+    assert message in str(e.value) and "\n" not in str(e.value)
+
+
+def test06_measure_diffuse_closed_form(variant_llvm_ad_rgb):
+    """A diffuse reflector measures ρ/π in every bin above the horizon, NaN exactly where
+    either direction is below it."""
+    values = measure({"type": "diffuse", "reflectance": {"type": "rgb",
+                                                         "value": [0.2, 0.5, 0.8]}})
+    wi, wo = bin_directions()
+    below = ((wi[:, 2] <= 0) | (wo[:, 2] <= 0)).reshape(merl.RES)
+    assert np.array_equal(np.isnan(values[0]), below)
+    for c, rho in enumerate((0.2, 0.5, 0.8)):
+        assert np.allclose(values[c][~below], rho / np.pi, rtol=1e-5)
+
+
+def test07_lookup_of_a_tabulated_bsdf(variant_llvm_ad_rgb):
+    """roughconductor tabulated, then looked up at each bin's centre turned by a random φh
+    (an isotropic BSDF does not see it): MERL's nearest-bin lookup returns the BSDF's own
+    f = eval/cosθo there, to float32 rounding. A lookup or tabulation with its axes crossed,
+    or φd unfolded, fails here."""
+    from mi_brdfs.checks.batch import evaluate
+
+    spec = {"type": "roughconductor", "alpha": 0.3, "material": "Au"}
+    values = measure(spec)
+    theta_h, theta_d, phi_d = (a.ravel() for a in merl.bin_centres())
+    rng = np.random.default_rng(4)
+    pick = rng.choice(len(theta_h), 5000, replace=False)
+    wi, wo = merl.directions(theta_h[pick], rng.uniform(-np.pi, np.pi, 5000), theta_d[pick],
+                             phi_d[pick])
+    keep = (wi[:, 2] > 1e-3) & (wo[:, 2] > 1e-3)
+    wi, wo = wi[keep], wo[keep]
+    direct = evaluate(spec, wi, wo).value / wo[:, 2:3]
+    looked = merl.lookup(values, wi, wo)
+    assert np.allclose(looked, direct, rtol=2e-3, atol=1e-6)
+    swapped = merl.lookup(values, wo, wi)  # reciprocal: the same bin
+    assert np.allclose(swapped, looked, rtol=1e-12)
+
+
+def test08_cli(variant_llvm_ad_rgb, tmp_path, monkeypatch):
+    """mi-brdfs measure writes the file; bad input is one line and writes nothing."""
+    monkeypatch.chdir(tmp_path)
+    p = run("measure", "diffuse reflectance=0.5", "-o", "d.binary")
+    assert p.returncode == 0, p.stderr
+    assert "wrote" in p.stdout and "1096216 of 1458000 bins measured" in p.stdout
+    assert np.nanmax(np.abs(merl.read(tmp_path / "d.binary") - 0.5 / np.pi)) < 1e-6
+    for args, message in [
+        (["measure", "diffuse", "-o", "d.txt"], "'d.txt' must end in .binary"),
+        (["measure", "diffuse", "lambert", "-o", "e.binary"], "2 BSDFs given; give one"),
+        (["measure", "diffuse", "--variant", "scalar_rgb", "-o", "e.binary"],
+         "measure needs an RGB JIT variant"),
+        (["measure", "diffuse", "-o", "/nonexistent/e.binary"], "does not exist"),
+    ]:
+        cli_one_line_error(args, message)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d.binary"]
