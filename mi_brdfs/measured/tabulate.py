@@ -22,6 +22,14 @@ def bin_directions() -> tuple[np.ndarray, np.ndarray]:
     return merl.directions(theta_h, 0.0, theta_d, phi_d)
 
 
+def _jit_rgb() -> bool:
+    """Whether the current variant is an RGB JIT one (MERL's format holds RGB)."""
+    import mitsuba as mi
+
+    return mi.variant() is not None and mi.is_rgb and not mi.is_polarized \
+        and mi.variant().startswith(("llvm", "cuda"))
+
+
 @keeps_variant
 def measure(bsdf, path=None, variant: str | None = None) -> np.ndarray:
     """
@@ -41,11 +49,9 @@ def measure(bsdf, path=None, variant: str | None = None) -> np.ndarray:
 
     if path is not None and not str(path).endswith(".binary"):
         raise MiBrdfsError(f"measure: the output {path} must end in .binary (MERL's format)")
-    jit_rgb = mi.variant() is not None and mi.is_rgb and not mi.is_polarized \
-        and mi.variant().startswith(("llvm", "cuda"))
-    if variant is not None or not jit_rgb:
+    if variant is not None or not _jit_rgb():
         use_variant(variant or "llvm_ad_rgb", fallback=False)
-    if not (mi.is_rgb and not mi.is_polarized and mi.variant().startswith(("llvm", "cuda"))):
+    if not _jit_rgb():
         raise MiBrdfsError(f"measure needs an RGB JIT variant (llvm_ad_rgb, cuda_ad_rgb), not "
                            f"{mi.variant()}: MERL's format holds red, green and blue")
     loaded = load_bsdf(bsdf)
