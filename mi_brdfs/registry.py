@@ -48,6 +48,7 @@ PLUGINS = {
     "orennayar": ("mi_brdfs.plugins.orennayar", "OrenNayar"),
     "ashikhmin": ("mi_brdfs.plugins.ashikhmin", "Ashikhmin"),
     "lafortune": ("mi_brdfs.plugins.lafortune", "Lafortune"),
+    "merl": ("mi_brdfs.plugins.merl", "Merl"),
 }
 
 # variant -> {plugin id -> class}

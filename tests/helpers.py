@@ -4,6 +4,8 @@ import math
 import os
 import subprocess
 import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 
@@ -165,3 +167,41 @@ def assert_matches_reference(value, f, wi, wo, rtol, what=""):
         f"wo = {wo[i[0]]}: difference {abs(a[i] - b[i]):.3g} > tolerance {tol[i]:.3g} "
         f"(rtol {rtol:g}, conditioning {cond[i[0], 0]:.3g})")
     return float(ratio[i])
+
+
+#: Where the tests keep the MERL files they write (regenerated when missing; the name carries
+#: the generator's version, so a changed generator never reads an old file).
+MERL_DIR = Path(tempfile.gettempdir()) / f"mi_brdfs-tests-{os.getuid()}"
+
+
+def glossy_brdf(wi, wo, rho_d=(0.3, 0.2, 0.1), rho_s=0.5, alpha=0.1):
+    """A closed-form isotropic BRDF (n, 3) in float64: a coloured Lambertian term and a grey
+    Beckmann lobe of the half vector with Kelemen & Szirmay-Kalos's (2001) approximation of
+    the geometry term, ρs·D(θh)/(4 (ωi·h)²)."""
+    wi, wo = np.asarray(wi, np.float64), np.asarray(wo, np.float64)
+    h = wi + wo
+    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    cos_h, cos_d = h[..., 2], np.sum(wi * h, axis=-1)
+    tan2 = (1.0 - cos_h ** 2) / cos_h ** 2
+    d = np.exp(-tan2 / alpha ** 2) / (np.pi * alpha ** 2 * cos_h ** 4)
+    return np.asarray(rho_d) / np.pi + (rho_s * d / (4.0 * cos_d ** 2))[..., None]
+
+
+def merl_file(name="glossy"):
+    """A MERL file the tests share: ``glossy`` (:func:`glossy_brdf` at every bin's centre,
+    unmeasured below the horizon, as ``mi-brdfs measure`` writes them)."""
+    from mi_brdfs.measured import merl
+
+    path = MERL_DIR / f"{name}-v1.binary"
+    if not path.exists():
+        MERL_DIR.mkdir(parents=True, exist_ok=True)
+        wi, wo = merl.bin_directions()
+        f = glossy_brdf(wi, wo)
+        f[(wi[:, 2] <= 0) | (wo[:, 2] <= 0)] = np.nan
+        merl.write(path, np.moveaxis(f.reshape(merl.RES + (3,)), -1, 0))
+    return path
+
+
+def spec(name):
+    """The spec of plugin ``name`` with its defaults: ``merl`` needs a file."""
+    return {"type": name, "filename": str(merl_file())} if name == "merl" else {"type": name}

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from conftest import LLVM_OK
+from helpers import merl_file
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -45,10 +46,23 @@ def test01_python_blocks_run(code, tmp_path):
 
 
 @pytest.mark.parametrize("xml", blocks("xml"))
-def test02_xml_blocks_load(xml, variant_scalar_rgb):
+def test02_xml_blocks_load(xml, variant_scalar_rgb, tmp_path):
+    """Each <bsdf> block loads; a MERL file it names is found by Mitsuba's file resolver."""
     import mitsuba as mi
     if "<bsdf" not in xml or "bitmap" in xml:
         pytest.skip("not a self-contained <bsdf> (a scene fragment or a texture file)")
+    for name in re.findall(r'name="filename" value="([^"]+\.binary)"', xml):
+        (tmp_path / name).symlink_to(merl_file())
+    kept = mi.FileResolver(mi.file_resolver())
+    mi.file_resolver().prepend(str(tmp_path))
+    try:
+        _load_bsdf_block(xml)
+    finally:
+        mi.set_file_resolver(kept)
+
+
+def _load_bsdf_block(xml):
+    import mitsuba as mi
     bsdf = mi.load_string(f'<scene version="3.0.0">{xml}</scene>'.replace(
         '<scene version="3.0.0"><bsdf', '<scene version="3.0.0"><shape type="sphere"><bsdf', 1)
         .replace("</scene>", "</shape></scene>"))

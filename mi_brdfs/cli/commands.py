@@ -417,7 +417,7 @@ def cmd_measure(args) -> int:
     specs = _bsdfs(args.bsdf)
     if len(specs) != 1:
         raise MiBrdfsError(f"measure: {len(specs)} BSDFs given; give one")
-    values = measure(specs[0], out, variant=args.variant)
+    values = measure(specs[0], out, variant=args.variant, noise=args.noise, seed=args.seed)
     measured = int(np.count_nonzero(~np.isnan(values[0])))
     print(f"wrote {out}: {measured} of {values[0].size} bins measured (the others below the "
           f"horizon), f up to {np.nanmax(values):.4g}")

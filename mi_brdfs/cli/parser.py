@@ -402,7 +402,23 @@ def _add_measure(sub) -> None:
                       ".binary file that the tools reading MERL's data read.")
     m.add_argument("-o", "--output", required=True, type=_output(".binary"),
                    metavar="FILE.binary", help="where to write it")
+    m.add_argument("--noise", type=_noise, default=(0.0, 0.0), metavar="REL[,ABS]",
+                   help="measurement noise: f·(1 + REL·ε₁) + ABS·ε₂, ε standard normal per bin "
+                        "and channel, clipped at 0 (default: none)")
+    m.add_argument("--seed", type=_seed, default=0, metavar="S",
+                   help="seed of the noise (default: 0)")
     m.set_defaults(func=cmd_measure)
+
+
+def _noise(text: str) -> tuple[float, float]:
+    """REL or REL,ABS: two finite numbers ≥ 0."""
+    try:
+        parts = [float(p) for p in text.split(",")]
+    except ValueError:
+        parts = []
+    if not 1 <= len(parts) <= 2 or not all(math.isfinite(p) and p >= 0 for p in parts):
+        raise argparse.ArgumentTypeError(f"'{text}' is not REL or REL,ABS (numbers ≥ 0)")
+    return (parts[0], parts[1] if len(parts) == 2 else 0.0)
 
 
 def _add_info(sub) -> None:

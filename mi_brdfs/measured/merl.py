@@ -91,6 +91,50 @@ def bin_centres() -> tuple:
     return tuple(np.meshgrid(theta_h, theta_d, phi_d, indexing="ij"))
 
 
+def coordinates(theta_h, theta_d, phi_d) -> tuple:
+    """Continuous bin coordinates (x, y, z) of half and difference angles, in which bin (i, j,
+    k)'s centre sits at (i, j, k): x = 90·√(θh/(π/2)) − ½, y = 90·θd/(π/2) − ½, z = 180·φd/π − ½
+    with φd folded into [0, π) (z is periodic with period 180: f(φd) = f(φd + π))."""
+    half_pi = np.pi / 2.0
+    x = np.sqrt(np.maximum(np.asarray(theta_h, np.float64), 0.0) / half_pi) * RES[0] - 0.5
+    y = np.asarray(theta_d, np.float64) / half_pi * RES[1] - 0.5
+    phi_d = np.asarray(phi_d, np.float64)
+    z = np.where(phi_d < 0.0, phi_d + np.pi, phi_d) / np.pi * RES[2] - 0.5
+    return x, y, z
+
+
+def interpolate(values: np.ndarray, wi, wo) -> np.ndarray:
+    """
+    f at direction pairs by trilinear interpolation between bin centres in the coordinates of
+    :func:`coordinates`: clamped to the first and last bin in θh and θd, periodic in φd (so
+    f(ωi, ωo) = f(ωo, ωi): swapping the directions turns φd by π). Unmeasured bins (NaN) count
+    as 0. (n, 3) float64.
+    """
+    theta_h, _, theta_d, phi_d = half_diff(wi, wo)
+    values = np.nan_to_num(values, nan=0.0)
+    out = 0.0
+    x, y, z = coordinates(theta_h, theta_d, phi_d)
+    x0, y0, z0 = np.floor(x), np.floor(y), np.floor(z)
+    for di in (0, 1):
+        i = np.clip(x0 + di, 0, RES[0] - 1).astype(np.int64)
+        wx = np.where(di, x - x0, 1.0 - (x - x0))
+        for dj in (0, 1):
+            j = np.clip(y0 + dj, 0, RES[1] - 1).astype(np.int64)
+            wy = np.where(dj, y - y0, 1.0 - (y - y0))
+            for dk in (0, 1):
+                k = np.mod(z0 + dk, RES[2]).astype(np.int64)
+                wz = np.where(dk, z - z0, 1.0 - (z - z0))
+                out = out + (wx * wy * wz)[:, None] * np.moveaxis(values[:, i, j, k], 0, -1)
+    return out
+
+
+def bin_directions() -> tuple[np.ndarray, np.ndarray]:
+    """(ωi, ωo), each ``(90·90·180, 3)``: the pair at the centre of every MERL bin, with φh = 0
+    (the format is isotropic), in the bins' order."""
+    theta_h, theta_d, phi_d = (a.ravel() for a in bin_centres())
+    return directions(theta_h, 0.0, theta_d, phi_d)
+
+
 def lookup(values: np.ndarray, wi, wo) -> np.ndarray:
     """f at direction pairs by MERL's nearest-bin lookup: (n, 3), NaN where unmeasured."""
     theta_h, _, theta_d, phi_d = half_diff(wi, wo)

@@ -15,13 +15,6 @@ from ..variants import keeps_variant
 from . import merl
 
 
-def bin_directions() -> tuple[np.ndarray, np.ndarray]:
-    """(ωi, ωo), each ``(90·90·180, 3)``: the pair at the centre of every MERL bin, with φh = 0
-    (the format is isotropic), in the bins' order."""
-    theta_h, theta_d, phi_d = (a.ravel() for a in merl.bin_centres())
-    return merl.directions(theta_h, 0.0, theta_d, phi_d)
-
-
 def _jit_rgb() -> bool:
     """Whether the current variant is an RGB JIT one (MERL's format holds RGB)."""
     import mitsuba as mi
@@ -31,7 +24,28 @@ def _jit_rgb() -> bool:
 
 
 @keeps_variant
-def measure(bsdf, path=None, variant: str | None = None) -> np.ndarray:
+def add_noise(values: np.ndarray, relative: float = 0.0, absolute: float = 0.0,
+              seed: int = 0) -> np.ndarray:
+    """
+    ``values`` as a gonioreflectometer with Gaussian noise would measure them: per bin and
+    channel, f' = max(0, f·(1 + relative·ε₁) + absolute·ε₂), ε independent standard normal
+    draws (seeded): a relative error (the detector's gain, the light's stability) and an
+    additive floor (dark current, stray light), the two terms of the error models of measured
+    BRDF data (e.g. Matusik et al. 2003, §3). Unmeasured bins stay NaN.
+    """
+    for name, value in (("relative", relative), ("absolute", absolute)):
+        if not (np.isfinite(value) and value >= 0):
+            raise MiBrdfsError(f"measure: the {name} noise must be finite and ≥ 0, not {value}")
+    if relative == 0 and absolute == 0:
+        return values
+    rng = np.random.default_rng(seed)
+    noisy = values * (1.0 + relative * rng.standard_normal(values.shape)) \
+        + absolute * rng.standard_normal(values.shape)
+    return np.maximum(noisy, 0.0)  # NaN stays NaN
+
+
+def measure(bsdf, path=None, variant: str | None = None, noise=(0.0, 0.0),
+            seed: int = 0) -> np.ndarray:
     """
     The BRDF f of ``bsdf`` (any form of :mod:`mi_brdfs.bsdfspec`) at the centre of every MERL
     bin, ``(3, 90, 90, 180)``, NaN where either direction lies below the horizon (unmeasured, as
@@ -40,6 +54,7 @@ def measure(bsdf, path=None, variant: str | None = None) -> np.ndarray:
     Measured in ``variant`` (an RGB JIT variant; default: the current one if it is such a
     variant, else ``llvm_ad_rgb``), f = eval/cosθo. A
     BSDF with the Anisotropic flag is measured at φh = 0 only, and a warning says so.
+    ``noise`` = (relative, absolute) adds measurement noise (:func:`add_noise`, ``seed``).
     """
     import mitsuba as mi
 
@@ -58,12 +73,12 @@ def measure(bsdf, path=None, variant: str | None = None) -> np.ndarray:
     if loaded.flags() & mi.BSDFFlags.Anisotropic:
         warnings.warn("measure: the BSDF is anisotropic and MERL's format isotropic: it is "
                       "measured at φh = 0 only", MiBrdfsWarning, stacklevel=3)
-    wi, wo = bin_directions()
+    wi, wo = merl.bin_directions()
     below = (wi[:, 2] <= 0.0) | (wo[:, 2] <= 0.0)
     value = evaluate(loaded, wi, wo).value
     with np.errstate(divide="ignore", invalid="ignore"):
         f = np.where(below[:, None], np.nan, value / wo[:, 2:3])
-    values = np.moveaxis(f.reshape(merl.RES + (3,)), -1, 0)
+    values = add_noise(np.moveaxis(f.reshape(merl.RES + (3,)), -1, 0), *noise, seed=seed)
     if path is not None:
         merl.write(path, values)
     return values

@@ -295,6 +295,19 @@ def choice(props, plugin: str, name: str, default: str, choices) -> str:
     return value
 
 
+def filename(props, plugin: str, name: str = "filename", suffix: str = "") -> str:
+    """A required file name, resolved as Mitsuba resolves its own (relative to the scene's
+    folder and the file resolver's paths); ``suffix``: the extension it must have."""
+    if name not in props:
+        raise ParameterError(plugin, name, Description("missing"),
+                             f"the plugin needs a file{f' ({suffix})' if suffix else ''}")
+    value = props[name]
+    if not isinstance(value, str) or not value.endswith(suffix):
+        raise ParameterError(plugin, name, value, f"must be a file name ending in {suffix}"
+                             if suffix else "must be a file name")
+    return str(mi.file_resolver().resolve(value))
+
+
 def boolean(props, plugin: str, name: str, default: bool) -> bool:
     if name not in props:
         return default

@@ -7,6 +7,7 @@ and every plugin of the package passes it, the compensated glass's ∂/∂η inc
 import mitsuba as mi
 import pytest
 from broken import GRADIENT_DEFECTS, register_broken_gradients
+from helpers import spec as spec_of
 
 from mi_brdfs import checks, registry
 from mi_brdfs.scattering import multiscatter
@@ -30,7 +31,7 @@ def test01_a_broken_derivative_is_found(variant_llvm_ad_rgb, defect):
     assert result.passed == (defect in ("none", "weight_detached")), result.message
 
 
-PLUGINS = [{"type": name} for name in registry.PLUGINS] + [
+PLUGINS = [spec_of(name) for name in registry.PLUGINS] + [
     {"type": "phong", "form": "original", "lobe": "halfway"},
     {"type": "cooktorrance", "diffuse_reflectance": 0.3, "shadowing": "smith",
      "distribution": "ggx", "specular_reflectance": 0.6},

@@ -11,6 +11,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 from conftest import set_variant
+from helpers import merl_file
 
 from mi_brdfs import registry
 
@@ -28,6 +29,7 @@ PLUGINS = {
     "lafortune": ("specular_reflectance_0", {"cx_1": 1.0, "cy_1": 1.0, "cz_1": 1.0}),
     "cooktorrance": ("diffuse_reflectance", {"multiscatter": True, "shadowing": "smith",
                                              "specular_reflectance": 0.5}),
+    "merl": ("scale", {"filename": str(merl_file())}),
 }
 
 

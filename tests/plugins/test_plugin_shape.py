@@ -9,13 +9,14 @@ import inspect
 import mitsuba as mi
 import numpy as np
 import pytest
+from helpers import spec as spec_of
 
 from mi_brdfs import registry
 from mi_brdfs.checks import batch
 from mi_brdfs.plugins import lobes
 
 #: Each plugin with its defaults, and the switches that add lobes
-SPECS = [{"type": name} for name in registry.PLUGINS] + [
+SPECS = [spec_of(name) for name in registry.PLUGINS] + [
     {"type": "cooktorrance", "diffuse_reflectance": 0.3, "multiscatter": True},
     {"type": "cooktorrance", "transmission": True, "multiscatter": True},
     {"type": "lafortune", "exponent_0": 10.0, "cx_1": 1.0, "cy_1": 1.0, "cz_1": 1.0},

@@ -5,6 +5,7 @@ import sys
 
 import mitsuba as mi
 import pytest
+from helpers import spec as spec_of
 
 import mi_brdfs
 from conftest import LLVM_OK
@@ -12,7 +13,7 @@ from conftest import LLVM_OK
 
 def test01_loadable_in_every_variant(variants_all):
     for name in mi_brdfs.PLUGINS:
-        bsdf = mi.load_dict({"type": name})
+        bsdf = mi.load_dict(spec_of(name))
         assert isinstance(bsdf, mi.BSDF)  # the BSDF class of *this* variant
         assert type(bsdf) is mi_brdfs.plugin_class(name)
     assert mi.variant() in mi_brdfs.registered_variants()
@@ -20,7 +21,9 @@ def test01_loadable_in_every_variant(variants_all):
 
 def test02_loadable_from_xml(variants_all):
     for name in mi_brdfs.PLUGINS:
-        bsdf = mi.load_string(f'<bsdf version="3.0.0" type="{name}"/>')
+        extra = "".join(f'<string name="{k}" value="{v}"/>' for k, v in spec_of(name).items()
+                        if k != "type")
+        bsdf = mi.load_string(f'<bsdf version="3.0.0" type="{name}">{extra}</bsdf>')
         assert type(bsdf).__name__ == mi_brdfs.plugin_class(name).__name__
 
 

@@ -11,7 +11,7 @@ import pytest
 from helpers import cli_one_line_error, run
 from mi_brdfs.errors import MiBrdfsError
 from mi_brdfs.measured import merl
-from mi_brdfs.measured.tabulate import bin_directions, measure
+from mi_brdfs.measured.tabulate import measure
 
 
 def _unit(theta, phi):
@@ -114,7 +114,7 @@ def test06_measure_diffuse_closed_form(variant_llvm_ad_rgb):
     either direction is below it."""
     values = measure({"type": "diffuse", "reflectance": {"type": "rgb",
                                                          "value": [0.2, 0.5, 0.8]}})
-    wi, wo = bin_directions()
+    wi, wo = merl.bin_directions()
     below = ((wi[:, 2] <= 0) | (wo[:, 2] <= 0)).reshape(merl.RES)
     assert np.array_equal(np.isnan(values[0]), below)
     for c, rho in enumerate((0.2, 0.5, 0.8)):
@@ -151,12 +151,77 @@ def test08_cli(variant_llvm_ad_rgb, tmp_path, monkeypatch):
     assert p.returncode == 0, p.stderr
     assert "wrote" in p.stdout and "1096216 of 1458000 bins measured" in p.stdout
     assert np.nanmax(np.abs(merl.read(tmp_path / "d.binary") - 0.5 / np.pi)) < 1e-6
+    p = run("measure", "diffuse reflectance=0.5", "--noise", "0.02", "-o", "n.binary")
+    assert p.returncode == 0, p.stderr
+    spread = np.nanstd(merl.read(tmp_path / "n.binary") / (0.5 / np.pi))
+    assert 0.018 < spread < 0.022
+    (tmp_path / "n.binary").unlink()
     for args, message in [
         (["measure", "diffuse", "-o", "d.txt"], "'d.txt' must end in .binary"),
         (["measure", "diffuse", "lambert", "-o", "e.binary"], "2 BSDFs given; give one"),
         (["measure", "diffuse", "--variant", "scalar_rgb", "-o", "e.binary"],
          "measure needs an RGB JIT variant"),
         (["measure", "diffuse", "-o", "/nonexistent/e.binary"], "does not exist"),
+        (["measure", "diffuse", "--noise", "0.1,-1", "-o", "e.binary"],
+         "'0.1,-1' is not REL or REL,ABS"),
     ]:
         cli_one_line_error(args, message)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d.binary"]
+
+
+def _at_coordinates(x, y, z):
+    """A direction pair at continuous bin coordinates (x, y, z) (φh = 0)."""
+    theta_h = ((np.asarray(x) + 0.5) / 90) ** 2 * np.pi / 2
+    theta_d = (np.asarray(y) + 0.5) / 90 * np.pi / 2
+    phi_d = (np.asarray(z) + 0.5) / 180 * np.pi
+    return merl.directions(theta_h, 0.0, theta_d, phi_d)
+
+
+def test09_interpolation_closed_forms():
+    """Trilinear between bin centres: data linear in the bin coordinates come back exactly
+    between the centres (and clamped beyond the first and last); a single bin k = 0 of φd is
+    seen half at z = −½ and z = 179.5, its neighbours across the fold (f(φd) = f(φd + π)); the
+    result is reciprocal. An interpolation with an axis misplaced, or φd clamped instead of
+    periodic, fails here."""
+    i, j, k = np.indices(merl.RES, dtype=np.float64)
+    linear = np.stack([1.0 + 0.01 * i + 0.02 * j,
+                       2.0 + 0.03 * i, 0.5 + 0.004 * j])
+    rng = np.random.default_rng(5)
+    x, y, z = rng.uniform(0, 89, 400), rng.uniform(0, 80, 400), rng.uniform(0, 179, 400)
+    wi, wo = _at_coordinates(x, y, z)
+    keep = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+    want = np.stack([1 + 0.01 * x + 0.02 * y, 2 + 0.03 * x, 0.5 + 0.004 * y], axis=1)
+    got = merl.interpolate(linear, wi, wo)
+    assert np.allclose(got[keep], want[keep], rtol=1e-9)
+    assert np.allclose(merl.interpolate(linear, wo, wi)[keep], got[keep], rtol=1e-12)
+    below = merl.interpolate(linear, *_at_coordinates(np.array([-0.4]), np.array([10.0]),
+                                                       np.array([5.0])))
+    assert np.allclose(below, [[1.2, 2.0, 0.54]], rtol=1e-9)  # x clamped to the first bin
+    hat = np.zeros((3,) + merl.RES)
+    hat[:, 30, 20, 0] = 1.0
+    for z, expected in ((0.0, 1.0), (-0.5, 0.5), (179.5, 0.5), (179.0, 0.0), (0.25, 0.75)):
+        pair = _at_coordinates(np.array([30.0]), np.array([20.0]), np.array([z]))
+        assert merl.interpolate(hat, *pair)[0, 0] == pytest.approx(expected, abs=1e-9), z
+
+
+def test10_noise_model():
+    """f·(1 + r·ε₁) + a·ε₂ clipped at 0: the relative spread of the noisy values is r where
+    the additive term is negligible, the additive spread a where f = 0 (half the draws clip
+    to 0); a seed repeats, another differs; NaN stays NaN; no noise returns the values."""
+    from mi_brdfs.measured.tabulate import add_noise
+
+    values = np.full((3,) + merl.RES, 2.0)
+    values[:, :, :, :90] = 0.0
+    values[:, 0] = np.nan
+    noisy = add_noise(values, 0.05, 1e-3, seed=7)
+    rel = (noisy[:, 1:, :, 90:] - 2.0) / 2.0
+    assert abs(rel.std() - 0.05) < 0.001 and abs(rel.mean()) < 0.001
+    floor = noisy[:, 1:, :, :90]
+    assert abs(np.mean(floor == 0.0) - 0.5) < 0.01
+    assert abs(np.sqrt(np.mean(floor ** 2) * 2) - 1e-3) < 5e-5
+    assert np.isnan(noisy[:, 0]).all() and not np.isnan(noisy[:, 1:]).any()
+    assert np.array_equal(add_noise(values, 0.05, 1e-3, seed=7), noisy, equal_nan=True)
+    assert not np.array_equal(add_noise(values, 0.05, 1e-3, seed=8), noisy, equal_nan=True)
+    assert add_noise(values) is values
+    with pytest.raises(MiBrdfsError, match="relative noise must be finite and ≥ 0, not -0.1"):
+        add_noise(values, -0.1)

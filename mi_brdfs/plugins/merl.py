@@ -1,0 +1,224 @@
+"""
+Measured BRDFs in MERL's format (Matusik, Pfister, Brand & McMillan 2003) as a Mitsuba BSDF:
+f interpolated between the bins' centres (or MERL's nearest bin), importance-sampled through the
+half vector from a density tabulated per incident angle (:mod:`mi_brdfs.measured.warp`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..measured import data, lookup, warp
+from . import lobes, properties
+
+PLUGIN = "merl"
+
+#: The share of samples drawn from the cosine-weighted hemisphere: a defensive mixture
+#: (Hesterberg 1995, "Weighted Average Importance Sampling and Defensive Mixture
+#: Distributions") that keeps the density positive wherever f is, whatever the table missed.
+COSINE_SHARE = 0.1
+
+#: The tables of each file in this variant (this module runs once per variant): every
+#: instance that names a file shares them.
+_tables: dict = {}
+
+
+def _columns(rgb: np.ndarray) -> np.ndarray:
+    """The bins' values as this variant reads them: RGB; luminance in monochrome variants;
+    in spectral ones the coefficients of Jakob & Hanika's (2019) smooth spectrum of RGB/s and
+    the scale s = 2·max(RGB), as Mitsuba stores unbounded RGB (its ``envmap`` and ``grid``),
+    the coefficients computed by Mitsuba's own ``bitmap`` texture."""
+    if mi.is_monochromatic:
+        return (rgb @ np.array([0.212671, 0.715160, 0.072169], np.float32))[:, None]
+    if not mi.is_spectral:
+        return rgb
+    scale = 2.0 * rgb.max(axis=1, keepdims=True)
+    normalised = rgb / np.maximum(scale, 1e-8)
+    bitmap = mi.Bitmap(np.ascontiguousarray(normalised.reshape(-1, 180, 3)),
+                       mi.Bitmap.PixelFormat.RGB)
+    texture = mi.load_dict({"type": "bitmap", "bitmap": bitmap, "raw": False,
+                            "filter_type": "nearest"})
+    coefficients = np.array(mi.traverse(texture)["data"]).reshape(-1, 3)
+    return np.concatenate([coefficients, scale], axis=1).astype(np.float32)
+
+
+class Table:
+    """One measured file in this variant: the bins' values (:func:`_columns`) and the
+    sampler's ``MarginalContinuous2D1``."""
+
+    def __init__(self, measured: data.Measured):
+        columns = _columns(measured.rgb)
+        self.channels = columns.shape[1]
+        # scalar variants call the methods with Python numbers: the rows stay in NumPy
+        scalar = not dr.is_jit_v(mi.Float)
+        self.buffer = columns if scalar else mi.Float(columns.ravel())
+        self.sampler = mi.MarginalContinuous2D1(measured.density, [measured.thetas])
+        self.unmeasured = measured.unmeasured
+
+    def spectrum(self, index, si):
+        """f in bin ``index`` (flat) as ``UnpolarizedSpectrum`` at ``si.wavelengths``."""
+        if isinstance(index, int):
+            c = [float(x) for x in self.buffer[index]]
+        else:
+            c = [dr.gather(mi.Float, self.buffer, index * self.channels + k)
+                 for k in range(self.channels)]
+        if mi.is_spectral:
+            return mi.srgb_model_eval(mi.Vector3f(c[0], c[1], c[2]), si.wavelengths) * c[3]
+        return mi.UnpolarizedSpectrum(c[0] if mi.is_monochromatic else mi.Color3f(*c))
+
+    def f(self, si, wo, nearest: bool):
+        """f at (ωi, ωo): trilinear between bin centres, or the nearest bin."""
+        if nearest:
+            return self.spectrum(lookup.nearest(si.wi, wo), si)
+        total = None
+        for index, w in lookup.corners(si.wi, wo):
+            term = self.spectrum(index, si) * w
+            total = term if total is None else total + term
+        return total
+
+    def pdf(self, wi, wo, active):
+        """The density of :meth:`sample` at ωo, the defensive mixture's."""
+        uv, jac = warp.to_square(wi, wo)
+        table = self.sampler.eval(uv, [warp.theta(wi)], active)
+        ok = active & (jac > 0)
+        table = dr.select(ok, table / dr.select(ok, jac, 1.0), 0.0)
+        cosine = mi.warp.square_to_cosine_hemisphere_pdf(wo)
+        return (1.0 - COSINE_SHARE) * table + COSINE_SHARE * cosine
+
+    def sample(self, wi, sample1, sample2, active):
+        """(ωo, valid): from the cosine-weighted hemisphere where ``sample1`` <
+        :data:`COSINE_SHARE`, else from the table."""
+        pick = sample1 < COSINE_SHARE
+        if type(pick) is bool and pick:  # scalar variants: only the branch taken
+            return mi.warp.square_to_cosine_hemisphere(sample2), True
+        uv, _ = self.sampler.sample(sample2, [warp.theta(wi)], active)
+        wo, _, valid = warp.to_direction(wi, uv)
+        if type(pick) is bool:
+            return wo, valid
+        return dr.select(pick, mi.warp.square_to_cosine_hemisphere(sample2), wo), pick | valid
+
+
+class Measured(lobes.Lobe):
+    """The measured BRDF times ``scale``, one glossy component, one-sided."""
+
+    kind, flags = "GlossyReflection", lobes.flag("GlossyReflection", "FrontSide")
+
+    def __init__(self, table: Table, scale, nearest: bool):
+        self.table, self.scale, self.nearest = table, scale, nearest
+
+    def eval_pdf(self, ctx, si, wo, active):
+        active = active & (si.wi.z > 0) & (wo.z > 0)
+        if lobes.none(active):
+            return mi.Spectrum(0.0), mi.Float(0.0)
+        scale = properties.clip_at(self.scale, si, active, 0.0, math.inf)
+        value = self.table.f(si, wo, self.nearest) * scale * wo.z
+        pdf = self.table.pdf(si.wi, wo, active)
+        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        return self.table.sample(si.wi, sample1, sample2, active)
+
+    def weight(self, ctx, si, active):
+        return mi.Float(1.0)  # one lobe: the mixture never weighs it
+
+
+class Merl(mi.BSDF):
+    r"""
+    .. _bsdf-merl:
+
+    Measured BRDF in MERL's format (:monosp:`merl`)
+    -----------------------------------------------
+
+    .. pluginparameters::
+
+     * - filename
+       - |string|
+       - A MERL ``.binary`` file (Matusik et al. 2003; https://www.merl.com/brdf/), or one
+         written by ``mi-brdfs measure``; resolved as Mitsuba resolves file names (Required)
+
+     * - filter_type
+       - |string|
+       - ``trilinear``: f interpolated between the centres of the bins; ``nearest``: the bin
+         the angles fall in, as MERL's own reader (Default: ``trilinear``)
+
+     * - scale
+       - |spectrum| or |texture|
+       - A factor on f, finite and ≥ 0 (Default: 1)
+       - |exposed|, |differentiable|
+
+    A measured isotropic BRDF tabulated in Rusinkiewicz's (1998) half and difference angles
+    over 90 × 90 × 180 bins (θh by its square root, θd, φd folded into [0, π)), after the
+    conventions of MERL's reader (``mi_brdfs.measured.merl``). The value is
+
+    .. math::
+
+        \texttt{eval} = \text{scale} \cdot f(\theta_h, \theta_d, \phi_d) \cos\theta_o ,
+
+    f interpolated trilinearly in the bins' coordinates (√θh, θd, φd; clamped to the first and
+    last bins in θh and θd, periodic in φd), which keeps it reciprocal: swapping ωi and ωo
+    turns φd by π. An unmeasured bin (a negative entry) counts as 0; the plugin warns how many
+    there are. It is one-sided (0 for either direction below the surface) and has one glossy
+    component, as Mitsuba's ``measured``.
+
+    **Sampling.** ωo is drawn through the half vector from a density tabulated per incident
+    angle (24 angles; a 128 × 64 grid over (√θh, φh − φi)) that is f·cosθo times the
+    Jacobian of the map, interpolated and sampled by Mitsuba's ``MarginalContinuous2D1``
+    (the sampler of its ``measured`` plugin, Dupuy & Jakob 2018), with an exact pdf; one
+    sample in ten comes from the cosine-weighted hemisphere instead (a defensive mixture,
+    Hesterberg 1995), so the density is positive wherever f is.
+
+    **Variants.** The data are RGB. RGB variants use them as they are, monochrome ones their
+    luminance, spectral ones Mitsuba's smooth spectra of RGB (Jakob & Hanika 2019) of each bin,
+    scaled as Mitsuba scales unbounded RGB (s = 2·max(RGB)) and interpolated as spectra.
+    Polarized variants get a depolarizer: the data describe no polarization.
+
+    **Loading.** A file is read once per process while it is unchanged (about 35 MB: a few
+    tenths of a second); every instance that names it shares its tables. A missing, short,
+    truncated or non-MERL file is one error naming the file and what is wrong.
+
+    .. tabs::
+        .. code-tab:: xml
+
+            <bsdf type="merl">
+                <string name="filename" value="gold-metallic-paint.binary"/>
+            </bsdf>
+
+        .. code-tab:: python
+
+            {'type': 'merl', 'filename': 'gold-metallic-paint.binary'}
+    """
+
+    def __init__(self, props):
+        super().__init__(props)
+        self.filename = properties.filename(props, PLUGIN, "filename", ".binary")
+        self.filter_type = properties.choice(props, PLUGIN, "filter_type", "trilinear",
+                                             ("trilinear", "nearest"))
+        #: The factor on f.
+        self.m_scale = properties.texture(props, PLUGIN, "scale", 1.0, 0.0, math.inf)
+        measured = data.load(self.filename)
+        if self.filename not in _tables:
+            _tables[self.filename] = Table(measured)
+        self.table = _tables[self.filename]
+        if measured.unmeasured:
+            properties.warn(PLUGIN, f"{self.filename}: {measured.unmeasured} of "
+                            f"{measured.rgb.shape[0]} bins unmeasured, evaluated as 0")
+        self.parameters_changed()
+
+    def parameters_changed(self, keys=None):
+        self.lobes = lobes.Mixture([Measured(self.table, self.m_scale,
+                                             self.filter_type == "nearest")])
+        self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
+
+    sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
+    eval_diffuse_reflectance = lobes.eval_diffuse_reflectance
+
+    def traverse(self, cb):
+        cb.put("scale", self.m_scale, mi.ParamFlags.Differentiable)
+
+    def to_string(self):
+        return (f"Merl[\n  filename = \"{self.filename}\",\n  filter_type = "
+                f"\"{self.filter_type}\",\n  scale = {properties.indent(self.m_scale)}\n]")
