@@ -32,8 +32,9 @@ def parse(spec):
     """
     The BSDF spec in canonical form: a dict (with a ``type``), an XML fragment (str starting
     with ``<``) or a ``mi.BSDF``; a command-line string is parsed into a dict or a fragment,
-    and a BSDF file (a ``pathlib.Path``, or a str naming an existing ``.xml`` file, blanks in
-    its path included) becomes the fragment it holds.
+    a BSDF file (a ``pathlib.Path``, or a str naming an existing ``.xml`` file, blanks in its
+    path included) becomes the fragment it holds, and a MERL file (``.binary``) the ``merl``
+    plugin that reads it.
 
     Raises MiBrdfsError with one line for anything else.
     """
@@ -47,6 +48,9 @@ def parse(spec):
         return spec
     if isinstance(spec, str) and spec.lstrip().startswith("<"):
         return spec.strip()
+    if str(spec).endswith(".binary") and (isinstance(spec, os.PathLike) or
+                                          os.path.isfile(spec)):
+        return {"type": "merl", "filename": os.fspath(spec)}  # MERL's format, blanks and all
     if isinstance(spec, os.PathLike) or (isinstance(spec, str) and spec.endswith(".xml")
                                          and os.path.isfile(spec)):
         return _bsdf_file(os.fspath(spec)).strip()  # a file, whatever blanks its path has
@@ -373,6 +377,8 @@ def parse_cli(tokens: list[str]) -> list:
             specs.append(token)
         elif token.endswith(".xml"):
             specs.append(_bsdf_file(token))
+        elif token.endswith(".binary"):  # measured data in MERL's format: the merl plugin
+            specs.append({"type": "merl", "filename": token})
         else:
             kind = plugin_kind(token)
             if kind == "Unknown":

@@ -189,7 +189,7 @@ def cmd_fit(args) -> int:
     (target,), (model,) = _one_bsdf(parse_cli(args.target), "TARGET"), \
         _one_bsdf(parse_cli(args.model), "--model")
     result = fit(target, model, args.free, pairs=args.pairs, steps=args.steps, seed=args.seed,
-                 variant=args.variant, progress=not args.quiet)
+                 variant=args.variant, progress=not args.quiet, metric=args.metric)
     print(result.summary())
     written = []
     if json_path:

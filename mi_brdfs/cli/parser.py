@@ -9,6 +9,8 @@ import argparse
 import math
 from pathlib import Path
 
+from ..fit.optimise import METRICS
+
 from .commands import (
     EXIT_USER_ERROR, cmd_audit, cmd_bench, cmd_check, cmd_compare, cmd_fit, cmd_furnace, cmd_info,
     cmd_measure, cmd_plot, cmd_render, cmd_simplify, cmd_tables, cmd_validate,
@@ -239,8 +241,9 @@ def _add_fit(sub) -> None:
                                     "albedo error and the fitted BSDF as a command line and XML.")
     ft.add_argument("target", nargs="+", metavar="TARGET",
                     help="the BSDF to match: a plugin name followed by its key=value parameters "
-                         "(e.g. cooktorrance material=Au alpha=0.2), a built-in, an XML file or "
-                         "a quoted XML fragment")
+                         "(e.g. cooktorrance material=Au alpha=0.2), a built-in, an XML file, "
+                         "a quoted XML fragment, or measured data: a MERL .binary file (compared "
+                         "at its own bins)")
     ft.add_argument("--model", nargs="+", required=True, metavar="MODEL", action=_Once,
                     help="the model to fit: a plugin name with key=value parameters (its values "
                          "are the start; those not in --free stay fixed), e.g. --model phong "
@@ -259,6 +262,9 @@ def _add_fit(sub) -> None:
                     help="Adam steps per start (default 800)")
     ft.add_argument("--seed", type=_seed, default=0, metavar="S",
                     help="seed of the direction pairs (default: 0)")
+    ft.add_argument("--metric", choices=list(METRICS), default="cuberoot",
+                    help="the objective: " + "; ".join(f"{k}: {v}" for k, v in METRICS.items())
+                         + " (default: cuberoot)")
     ft.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     ft.set_defaults(func=cmd_fit)
 

@@ -78,6 +78,16 @@ with e = ``eval`` = f·cosθo, so the compared quantity is f·cosθi·cosθo, an
   for BRDF Modeling", CIC) found fits under a cube-root metric perceptually closer than under
   RMS metrics.
 
+**Measured targets and other metrics.** A MERL file (``fit X.binary``, or ``merl
+filename=X.binary``) is compared at its own bins: ``pairs`` measured bins drawn at random, at
+their centres, with the file's values, not interpolated (:func:`~mi_brdfs.fit.optimise.
+measured_pairs`). Since MERL spaces its bins uniformly in (√θh, θd, φd), as the pairs above
+are drawn, the cube-root objective is the mean over MERL's bins either way. ``metric`` selects
+the metric of the literature instead (:data:`~mi_brdfs.fit.optimise.METRICS`): Ngan et al.'s
+(2005) L2 of f·cosθi, Low et al.'s (2012) L2 of log(1 + f·cosθi), Bieron & Peers' (2020) the
+same weighed by cosθo, each an integral over dωi dωo, each pair weighed by the solid angle its
+bin covers (4 cosθd·sinθd·sinθh dθh dθd dφd dφh, Rusinkiewicz 1998).
+
 The **residual** reported is not this objective but the plain relative L2 of the raw values over
 the same pairs, ‖eval_fit − eval_target‖ / ‖eval_target‖ (dominated by the largest values: for
 a microfacet target, its grazing pairs; the same of f·cosθi·cosθo, the quantity compared, is
@@ -119,14 +129,17 @@ import numpy as np
 from ..errors import MiBrdfsError, arguments, counts, valid_seed
 from ..variants import keeps_variant
 from .flags import fit_flags
-from .optimise import EPSILON, _best, _require_ad_rgb, _run_starts, _target_values, direction_pairs
+from .optimise import (
+    EPSILON, METRICS, _best, _require_ad_rgb, _run_starts, _target_values, check_metric,
+    direction_pairs,
+)
 from .parameters import (
     WIDTHS, Parameter, _parameters, _prepare_model, _starts, _written, beckmann_width,
 )
 from .result import ALBEDO_THETAS, FitResult, _figures, plot_fit, write_json
 from .spec import command_line, spec_text
 
-__all__ = ["ALBEDO_THETAS", "EPSILON", "WIDTHS", "FitResult", "Parameter", "beckmann_width",
+__all__ = ["ALBEDO_THETAS", "EPSILON", "METRICS", "WIDTHS", "FitResult", "Parameter", "beckmann_width",
            "command_line", "direction_pairs", "fit", "plot_fit", "spec_text", "write_json"]
 
 
@@ -153,7 +166,7 @@ def _checked(starts: str, lr: float, thetas_deg) -> np.ndarray:
 @keeps_variant
 def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: float = 0.1,
         seed: int = 0, starts: str = "auto", thetas_deg=ALBEDO_THETAS, variant: str | None = None,
-        progress: bool = False) -> FitResult:
+        progress: bool = False, metric: str = "cuberoot") -> FitResult:
     """
     Fit the continuous parameters of ``model`` so that its ``eval`` (f·cosθo) matches that of
     ``target`` (see the module docstring for the objective, the pairs and the ranges).
@@ -168,6 +181,8 @@ def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: f
     are kept). ``steps``: Adam steps per start. ``lr``: Adam's learning rate in the transformed
     variables. ``seed``: of the pairs. ``starts``: ``'auto'`` (MODEL's values, and the closed-form
     width mapping or spread widths) or ``'given'`` (MODEL's values only).
+    Parameter ``metric``: the objective, one of :data:`~mi_brdfs.fit.optimise.METRICS`
+    (default: the cube root).
     Parameter ``variant``: an RGB AD variant to fit in (default: the current one, which must
     be one; ``llvm_ad_rgb`` when none is set). The caller's variant is set again on return,
     and when the fit raises (:func:`mi_brdfs.variants.variant_kept`).
@@ -185,6 +200,7 @@ def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: f
     clock = time.perf_counter()
     variant = _require_ad_rgb(variant)
     thetas = _checked(starts, lr, thetas_deg)
+    check_metric(metric)
     target = parse(target)
     model = parse(model)
     if not isinstance(model, dict):
@@ -202,14 +218,15 @@ def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: f
     wi, wo, target_values = _target_values(target, target_bsdf, pairs, seed, notes)
     candidates = _starts(starts, spec, names, given, target, target_bsdf)
     runs = _run_starts(bsdf, params, candidates, wi, wo, target_values, steps, lr, model,
-                       progress)
+                       progress, metric)
     best = _best(runs, model)
     values, loss = runs[best]
     fitted, written = _written(params, values, spec)
     dr.sync_thread()
     figures = _figures(target_bsdf, fitted, wi, wo, target_values, thetas)
-    flags = fit_flags(params, written, fitted, runs, best, figures, wi, target_values)
+    flags = fit_flags(params, written, fitted, runs, best, figures, wi, wo, target_values,
+                      metric)
     return FitResult(target=target, model=model, spec=fitted, parameters=written, loss=loss,
                      start=best, starts={label: r[1] for label, r in runs.items()},
-                     pairs=len(wi), steps=steps, seed=seed, variant=variant,
+                     pairs=len(wi), steps=steps, seed=seed, variant=variant, metric=metric,
                      seconds=time.perf_counter() - clock, notes=notes, flags=flags, **figures)

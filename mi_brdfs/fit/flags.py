@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .optimise import EPSILON
+from .optimise import objective_np
 from .parameters import Parameter, base_name
 
 #: How close to a bound (a fraction of the width of the transformed range) counts as at it.
@@ -65,7 +65,7 @@ def _at_bounds(params: list[Parameter], written: dict) -> list[str]:
     return out
 
 
-def _zero_model(figures: dict, wi, target_values, loss: float) -> list[str]:
+def _zero_model(figures: dict, wi, wo, target_values, loss: float, metric: str) -> list[str]:
     """
     Flags of a fit no better than the zero model, by the residual of f·cosθi·cosθo (the light
     each pair carries under uniform illumination), the albedo and the objective. Not by the
@@ -89,8 +89,8 @@ def _zero_model(figures: dict, wi, target_values, loss: float) -> list[str]:
     elif figures["albedo_error"] >= zero_albedo > 0:
         out.append(f"albedo error {figures['albedo_error']:.4g} ≥ the zero model's "
                    f"{zero_albedo:.4g}")
-    projected = np.asarray(target_values) * np.asarray(wi)[:, 2:3]
-    zero_loss = float(np.mean((EPSILON ** (1 / 3) - np.cbrt(projected + EPSILON)) ** 2))
+    zero_loss = objective_np(metric, np.zeros_like(target_values), np.asarray(wi),
+                             np.asarray(wo), target_values)
     if math.isfinite(loss) and loss >= zero_loss:
         out.append(f"objective {loss:.4g} ≥ the zero model's {zero_loss:.4g}")
     return out
@@ -141,14 +141,14 @@ def _energy(spec: dict, figures: dict) -> list[str]:
 
 
 def fit_flags(params: list[Parameter], written: dict, spec: dict, runs: dict, best: str,
-              figures: dict, wi, target_values) -> list[str]:
+              figures: dict, wi, wo, target_values, metric: str = "cuberoot") -> list[str]:
     """
     Every flag of a fit, one line each (empty: none): parameters at a bound
     (:data:`AT_BOUND`; unless the fit reproduces its target, :data:`EXACT`), residuals, albedo error or objective no better than the zero model's,
     starts whose objective is not finite, and an unphysical fitted BSDF.
     """
     out = _at_bounds(params, written) if not figures["residual_projected"] < EXACT else []
-    out += _zero_model(figures, wi, target_values, runs[best][1])
+    out += _zero_model(figures, wi, wo, target_values, runs[best][1], metric)
     out += [f"the start '{label}' diverged (objective {loss})"
             for label, (_, loss) in runs.items() if not math.isfinite(loss)]
     out += _energy(spec, figures)

@@ -40,6 +40,7 @@ class FitResult:
     seed: int
     variant: str
     seconds: float
+    metric: str = "cuberoot"
     notes: list = field(default_factory=list)
     flags: list = field(default_factory=list)
 
@@ -61,14 +62,14 @@ class FitResult:
                 "fitted": self.command_line(),
                 "xml": self.xml(), "objective": self.loss, "start": self.start,
                 "variant": self.variant, "pairs": self.pairs, "steps": self.steps,
-                "seed": self.seed, "flags": list(self.flags)}
+                "seed": self.seed, "metric": self.metric, "flags": list(self.flags)}
 
     def summary(self) -> str:
         """The printed report: fitted values, residual, albedo error, command line and XML."""
         width = max(len(n) for n in self.parameters)
         lines = [f"fit of {spec_text(self.model)} to {spec_text(self.target)} "
                  f"({self.pairs} direction pairs, {self.steps} steps, start: {self.start}, "
-                 f"{self.seconds:.1f} s)"]
+                 f"metric: {self.metric}, {self.seconds:.1f} s)"]
         lines += [f"  {name:<{width}} = {_show(value)}"
                   for name, value in self.parameters.items()]
         lines.append(f"residual      ‖f_fit − f_target‖/‖f_target‖ = {self.residual:.4g} "

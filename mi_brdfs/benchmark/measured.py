@@ -1,0 +1,148 @@
+"""
+Measured BRDFs in ``make bench``: the ``merl`` plugin's sampler against cosine sampling, as the
+efficiency of the albedo estimator and as the time to 1 % relative RMSE in a render, on a
+glossy and a diffuse material; and its render cost against ``cooktorrance`` on the same scene.
+The materials are known BSDFs tabulated by the virtual gonioreflectometer
+(:func:`mi_brdfs.measured.tabulate.measure`) into a temporary folder.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from pathlib import Path
+
+import drjit as dr
+import mitsuba as mi
+
+from ..bsdfspec import load_bsdf
+from ..campaign.core import Context, Row, Section, md_table
+from ..measured.tabulate import measure
+from ..scenes import load_scene
+from ..timing import interleaved, median, median_ratio
+from . import error_time, strategies
+
+#: The measured materials: (label, the BSDF tabulated, the sampler's target against cosine).
+MATERIALS = [
+    ("glossy: roughconductor Au, GGX α = 0.1", "roughconductor material=Au alpha=0.1 "
+                                                "distribution=ggx", 10.0),
+    ("diffuse: diffuse ρ = 0.5", "diffuse reflectance=0.5", None),
+]
+
+#: The render-cost pair: cooktorrance (Smith, Au, α = 0.2) tabulated, against itself.
+COST_SOURCE = "cooktorrance material=Au alpha=0.2 shadowing=smith"
+#: Target: merl's render time at most this many times cooktorrance's, llvm_ad_rgb.
+TARGET_COST = 1.3
+
+#: A BSDF sampled by the cosine-weighted hemisphere alone (the baseline of the comparison).
+COSINE = "mi_brdfs_bench_cosine"
+
+
+def _register_cosine() -> None:
+    """Register :data:`COSINE` in the current variant: a Python BSDF that evaluates its nested
+    ``bsdf`` and samples ωo from the cosine-weighted hemisphere, pdf cosθo/π."""
+    class Cosine(mi.BSDF):
+        def __init__(self, props):
+            super().__init__(props)
+            self.inner = props["bsdf"]
+            self.m_flags = int(self.inner.flags())
+            self.m_components = [int(self.inner.flags(0))]
+
+        def eval(self, ctx, si, wo, active=True):
+            return self.inner.eval(ctx, si, wo, active)
+
+        def pdf(self, ctx, si, wo, active=True):
+            ok = active & (si.wi.z > 0) & (wo.z > 0)
+            return dr.select(ok, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            bs = dr.zeros(mi.BSDFSample3f)
+            bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
+            bs.pdf = self.pdf(ctx, si, bs.wo, active)
+            bs.eta, bs.sampled_component = 1.0, 0
+            bs.sampled_type = mi.UInt32(int(mi.BSDFFlags.GlossyReflection))
+            ok = bs.pdf > 0
+            value = self.inner.eval(ctx, si, bs.wo, active & ok)
+            return bs, dr.select(ok, value / dr.select(ok, bs.pdf, 1.0), 0.0)
+
+    mi.register_bsdf(COSINE, Cosine)
+
+
+def cosine_sampled(bsdf) -> mi.BSDF:
+    """``bsdf`` (loaded) sampled by the cosine-weighted hemisphere."""
+    _register_cosine()
+    return mi.load_dict({"type": COSINE, "bsdf": bsdf})
+
+
+def _efficiency(ctx: Context, s: Section, label: str, merl, target) -> tuple:
+    """Estimator efficiency and time to 1 % in the showcase, merl against cosine sampling."""
+    m = strategies.measure({"sample()": (strategies.own, merl),
+                            "cosine": (strategies.cosine, merl)}, ctx)
+    eff = {k: 1.0 / (v * t) if v > 0 else math.inf for k, (v, t, _) in m.items()}
+    spps = [2 ** k for k in range(ctx.n(6, 2))]
+    reference_spp = 16 * spps[-1]
+    rows, _ = error_time.measure("showcase", {"merl": merl, "cosine": cosine_sampled(merl)},
+                                 spps, ctx.n(96, 16), ctx.n(7, 2), reference_spp)
+    times = {k: error_time.time_to(rows, k, reference_spp) for k in ("merl", "cosine")}
+    ratio = times["cosine"] / times["merl"]
+    s.values[f"merl sampling vs cosine, time to 1 %: {label}"] = f"{ratio:.3g}×"
+    s.values[f"merl sampling vs cosine, estimator efficiency: {label}"] = \
+        f"{eff['sample()'] / eff['cosine']:.3g}×"
+    if target:
+        s.rows.append(Row(f"merl, {label}", "time to 1 % rel. RMSE, cosine sampling / merl's",
+                          f"{ratio:.3g}×", f"≥ {target:g}×", bool(ratio >= target)))
+    return (label, f"{m['sample()'][0]:.3g}", f"{m['cosine'][0]:.3g}",
+            f"{eff['sample()'] / eff['cosine']:.3g}×", f"{times['merl']:.3g} s",
+            f"{times['cosine']:.3g} s", f"**{ratio:.3g}×**")
+
+
+def _cost(ctx: Context, s: Section, merl) -> tuple:
+    """merl against the cooktorrance it tabulates, every sphere of the showcase, render
+    times."""
+    res, spp = ctx.n(128, 32), ctx.n(32, 4)
+    ids = error_time.SCENES["showcase"]
+    scenes = {k: load_scene("showcase", {"res": str(res)}, bsdfs={i: b for i in ids})
+              for k, b in (("merl", merl), ("cooktorrance", COST_SOURCE))}
+    for sc in scenes.values():
+        mi.render(sc, spp=spp)  # the JIT compilation, apart
+    times = interleaved({k: (lambda sc=sc: mi.render(sc, spp=spp)) for k, sc in scenes.items()},
+                        repeats=ctx.n(15, 2), warmup=0)
+    ratio = median_ratio(times, "merl", "cooktorrance")
+    s.values["merl vs cooktorrance, render time"] = f"{ratio:.3f}×"
+    s.rows.append(Row("merl vs cooktorrance (Smith, Au, α = 0.2, tabulated)",
+                      f"{ctx.variant} render time ratio", f"{ratio:.3f}×", f"≤ {TARGET_COST}×",
+                      ratio <= TARGET_COST))
+    per = {k: median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
+    return f"{per['merl']:.1f} ns", f"{per['cooktorrance']:.1f} ns", f"{ratio:.3f}×"
+
+
+def section(ctx: Context) -> Section:
+    s = Section("Measured BRDFs: merl")
+    with tempfile.TemporaryDirectory() as folder:
+        def tabulated(spec, name):
+            path = Path(folder) / f"{name}.binary"
+            measure(spec, path, variant=ctx.variant)
+            return load_bsdf({"type": "merl", "filename": str(path)})
+
+        rows = [_efficiency(ctx, s, label, tabulated(spec, f"m{i}"), target)
+                for i, (label, spec, target) in enumerate(MATERIALS)]
+        cost = _cost(ctx, s, tabulated(COST_SOURCE, "cost"))
+    s.markdown = "\n".join([
+        "The `merl` plugin on materials of known BSDFs tabulated by `mi-brdfs measure`. Its "
+        "sampler (through the half vector, with one sample in ten from the cosine) against "
+        "the cosine-weighted hemisphere alone (the same BSDF evaluated, "
+        f"`benchmark.measured.{COSINE}`): the variance per sample of the albedo estimator and "
+        "its efficiency 1/(variance × time) (Sampling strategies' method, averaged over "
+        f"θ ∈ {{{', '.join(f'{t:g}°' for t in strategies.THETAS)}}}), and the time to 1 % "
+        "relative RMSE in the showcase, every sphere the material (Error against time's "
+        f"method), `{ctx.variant}`.", "",
+        md_table(["material", "variance: merl", "variance: cosine", "estimator efficiency",
+                  "time to 1 %: merl", "cosine", "cosine / merl"], rows), "",
+        f"Render cost: `merl` of `{COST_SOURCE}` tabulated against that `cooktorrance`, every "
+        f"sphere of the showcase, `{ctx.variant}`, medians of interleaved renders (target "
+        f"≤ {TARGET_COST}×).", "",
+        md_table(["merl per sample", "cooktorrance per sample", "ratio"], [cost])])
+    return s
