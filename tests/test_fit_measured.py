@@ -5,6 +5,7 @@ angle weights against a closed form, a known answer recovered from a tabulated B
 and the one-line errors.
 """
 
+import json
 import math
 
 import numpy as np
@@ -95,3 +96,35 @@ def test06_cli(ggx_file, tmp_path):
             "--steps", "100", "-q", "-o", str(tmp_path / "f.json"))
     assert p.returncode == 0, p.stderr
     assert "metric: low" in p.stdout and "measured target: 2048 of its bins" in p.stdout
+
+
+def test07_ranking_table():
+    """Each metric's column ranks the models by its own objective, lowest first."""
+    from mi_brdfs.fit.models import ranking_table
+
+    table = {"a": {"cuberoot": 3.0, "ngan": 1.0, "low": 2.0, "bieron": 1.0},
+             "b": {"cuberoot": 1.0, "ngan": 2.0, "low": 1.0, "bieron": 3.0},
+             "c": {"cuberoot": 2.0, "ngan": 3.0, "low": 3.0, "bieron": 2.0}}
+    rows = {r[0]: r[1:] for r in ranking_table(table)}
+    assert rows["a"] == ("3 (3)", "1 (1)", "2 (2)", "1 (1)")
+    assert rows["b"] == ("1 (1)", "2 (2)", "1 (1)", "3 (3)")
+
+
+def test08_models_all_cli(ggx_file, tmp_path):
+    """--models fits the lecture models named, scores each under every metric and writes the
+    report, its JSON and the two figures; Cook-Torrance, the target's own model family, ranks
+    first under every metric against Phong. Bad names are one line."""
+    p = run("fit", str(ggx_file), "--models", "phong,cooktorrance", "--pairs", "2048",
+            "--steps", "150", "-q", "--out", str(tmp_path))
+    assert p.returncode == 0, p.stderr
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["lobes.png", "models.json",
+                                                          "models.md", "spheres.png"]
+    doc = json.loads((tmp_path / "models.json").read_text())
+    scores = doc["scores"]
+    assert set(scores) == {"phong", "cooktorrance"} and set(scores["phong"]) == set(METRICS)
+    assert all(scores["cooktorrance"][m] < scores["phong"][m] for m in METRICS)
+    assert "| cooktorrance | " in (tmp_path / "models.md").read_text()
+    cli_one_line_error(["fit", str(ggx_file), "--models", "phong,he"],
+                       "--models phong,he: he is not a lecture model")
+    cli_one_line_error(["fit", str(ggx_file), "--models", "all", "--model", "ward"],
+                       "not allowed with argument")

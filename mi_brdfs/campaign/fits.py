@@ -6,22 +6,11 @@ Campaign section: how well do the lecture models describe Mitsuba's built-ins? `
 beside the ranking of Ngan, Durand & Matusik (2005, "Experimental Analysis of BRDF Models",
 EGSR), and the lobes and albedo curves side by side.
 
-The models start from the lecture's reading of each material: Phong's halfway (Blinn-Phong)
-lobe and Ward's balanced lobe, each over a Lambertian base, every continuous parameter free;
-Cook-Torrance (V-cavity masking, exact Fresnel) with the gold of the target for the metal (α
-and the specular factor free) and, for the two plastics, as Cook & Torrance (1982, "A
-Reflectance Model for Computer Graphics", ACM TOG 1(1)) render a plastic: a specular lobe with
-the Fresnel term of a dielectric of free η (k = 0) over a Lambertian base of free albedo, α
-and the specular factor free too. Free η and k together for the metal made the fit diverge
-(NaN from every start), so the metal is given. Ashikhmin & Shirley (2000, "An Anisotropic Phong
-BRDF Model", JGT 5(2)) is fitted isotropic (the targets are) over its own diffuse term, with
-the exponent, Rs (Schlick's R0, per channel) and Rd free. Lafortune et al. (1997, "Non-Linear
-Approximation of Reflectance Functions", SIGGRAPH) is one lobe over a Lambertian term, starting
-as Phong's mirror lobe, C = (−1, −1, 1): with ``normalize`` the lobe depends on C/max|C| only, so
-Cx = Cy = −1 stay and Cz is free (|Cz| < 1 leans the lobe towards grazing angles, the paper's
-off-specular reflection), with the exponent, ρs and ρd. The paper's three lobes (a second
-forward lobe and a retro-reflective one: ten free parameters) took over a minute per fit of
-roughplastic and ended with two lobes at ρs = 1, the bound: one lobe here.
+The models start from the lecture's reading of each material (:mod:`mi_brdfs.fit.models`,
+which ``mi-brdfs fit --models all`` shares): for the metal Cook-Torrance takes the target's gold,
+since free η and k together made the fit diverge (NaN from every start); Lafortune et al.'s
+(1997) three lobes (a second forward lobe and a retro-reflective one: ten free parameters) took
+over a minute per fit of roughplastic and ended with two lobes at ρs = 1, the bound: one lobe.
 """
 
 from __future__ import annotations
@@ -29,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..fit import ALBEDO_THETAS, fit, spec_text
+from ..fit.models import STYLES, models_for
 from ..plots import cube_root_lobe, lobe_values, pyplot, save_figure
 from .core import Context, Row, Section, image, md_table
 
@@ -38,20 +28,6 @@ TARGETS = [
     ("roughplastic (defaults)", "roughplastic"),
     ("principled (roughness 0.4)", "principled roughness=0.4"),
 ]
-
-#: Model starts: a plugin with its start values, and the free parameters (None: all).
-PHONG = ("phong lobe=halfway diffuse_reflectance=0.2 specular_reflectance=0.5", None)
-WARD = ("ward diffuse_reflectance=0.2 specular_reflectance=0.5", None)
-CT_METAL = ("cooktorrance material=Au", "alpha,specular_reflectance")
-CT_PLASTIC = ("cooktorrance eta=1.5 k=0 diffuse_reflectance=0.5",
-              "alpha,eta,specular_reflectance,diffuse_reflectance")
-ASHIKHMIN = ("ashikhmin diffuse_reflectance=0.2 specular_reflectance=0.5", None)
-LAFORTUNE = ("lafortune diffuse_reflectance=0.2 specular_reflectance_0=0.5",
-             "cz_0,exponent_0,specular_reflectance_0,diffuse_reflectance")
-
-#: The fitted models, in the order of the tables, with their colour and line in the figure.
-STYLES = {"phong": ("C0", "--"), "ward": ("C1", "-."), "cooktorrance": ("C3", ":"),
-          "ashikhmin": ("C2", "-"), "lafortune": ("C4", "--")}
 
 #: Pairs with θi or θo at least this (degrees) are the grazing ones of :func:`grazing_residuals`.
 GRAZING = 70.0
@@ -63,13 +39,6 @@ SANITY = ("cooktorrance material=Au shadowing=smith alpha=0.1 specular_reflectan
 
 #: Incident angles of the lobe panels.
 LOBE_THETAS = (30.0, 75.0)
-
-
-def models_for(target: str) -> list:
-    """(name, model start, free) of the five lecture models for a target spec."""
-    ct = CT_METAL if target.startswith("roughconductor") else CT_PLASTIC
-    return [("phong", *PHONG), ("ward", *WARD), ("cooktorrance", *ct),
-            ("ashikhmin", *ASHIKHMIN), ("lafortune", *LAFORTUNE)]
 
 
 def _sizes(ctx: Context) -> dict:

@@ -182,12 +182,14 @@ def cmd_fit(args) -> int:
 
     json_path = check_writable(args.output) if args.output else None
     plot_path = check_writable(args.plot) if args.plot else None
-    if plot_path:
+    if plot_path or args.models:
         from ..plots import pyplot
         pyplot()  # matplotlib missing: say so before the fit
     mi_brdfs.use_variant(args.variant, fallback=False)
-    (target,), (model,) = _one_bsdf(parse_cli(args.target), "TARGET"), \
-        _one_bsdf(parse_cli(args.model), "--model")
+    (target,) = _one_bsdf(parse_cli(args.target), "TARGET")
+    if args.models:
+        return _fit_models(args, target)
+    (model,) = _one_bsdf(parse_cli(args.model), "--model")
     result = fit(target, model, args.free, pairs=args.pairs, steps=args.steps, seed=args.seed,
                  variant=args.variant, progress=not args.quiet, metric=args.metric)
     print(result.summary())
@@ -198,6 +200,25 @@ def cmd_fit(args) -> int:
         written.append(plot_fit(result, plot_path))
     if written:
         print("wrote " + " and ".join(written))
+    return 0
+
+
+def _fit_models(args, target) -> int:
+    """``mi-brdfs fit TARGET --models ...``."""
+    from ..errors import MiBrdfsError
+    from ..fit.models import chosen, fit_models, ranking_table
+    from ..fit.optimise import METRICS
+    from ..markdown import md_table
+
+    names = chosen(args.models)
+    if args.free or args.output or args.plot:
+        raise MiBrdfsError("--models writes its own report (--out DIR): --free, -o and --plot "
+                           "go with --model")
+    out = _report_folder(args, "models.md")
+    done = fit_models(target, names, args.metric, out, pairs=args.pairs, steps=args.steps,
+                      seed=args.seed, progress=not args.quiet)
+    print(md_table(["model", *METRICS], ranking_table(done["scores"])))
+    print("wrote " + ", ".join(done["written"]))
     return 0
 
 

@@ -244,10 +244,18 @@ def _add_fit(sub) -> None:
                          "(e.g. cooktorrance material=Au alpha=0.2), a built-in, an XML file, "
                          "a quoted XML fragment, or measured data: a MERL .binary file (compared "
                          "at its own bins)")
-    ft.add_argument("--model", nargs="+", required=True, metavar="MODEL", action=_Once,
-                    help="the model to fit: a plugin name with key=value parameters (its values "
-                         "are the start; those not in --free stay fixed), e.g. --model phong "
-                         "lobe=halfway diffuse_reflectance=0")
+    which = ft.add_mutually_exclusive_group(required=True)
+    which.add_argument("--model", nargs="+", metavar="MODEL", action=_Once,
+                       help="the model to fit: a plugin name with key=value parameters (its "
+                            "values are the start; those not in --free stay fixed), e.g. --model "
+                            "phong lobe=halfway diffuse_reflectance=0")
+    which.add_argument("--models", metavar="all|M1,M2,...",
+                       help="fit every lecture model (all: phong, ward, cooktorrance, ashikhmin, "
+                            "lafortune), or those named, from the lecture's starts (mi_brdfs.fit."
+                            "models); write --out DIR/models.md (each scored under every metric "
+                            "and ranked), models.json, lobes.png and spheres.png")
+    ft.add_argument("--out", metavar="DIR", default=".",
+                    help="the folder of --models' report (default: the current folder)")
     ft.add_argument("--free", metavar="P1,P2,...",
                     help="the parameters to fit, by name (default: all of MODEL's continuous ones)")
     ft.add_argument("-o", "--output", metavar="FIT.json", type=_output(".json"),
