@@ -271,7 +271,7 @@ def test09_cli_writes_json(variant_llvm_ad_rgb, tmp_path, monkeypatch, capsys):
      "folder /nonexistent does not exist"),
     (["fit", "lambert", "--model", "lambert", "-o", "x.txt"], "'x.txt' must end in .json"),
     (["fit", "lambert", "--model", "lambert", "diffuse"], "--model names 2 BSDFs; give one"),
-    (["fit", "lambert"], "the following arguments are required: --model"),
+    (["fit", "lambert"], "one of the arguments --model --models is required"),
 ])
 def test10_cli_bad_input_exit_2_one_line(variant_llvm_ad_rgb, tmp_path, monkeypatch, args,
                                          message):

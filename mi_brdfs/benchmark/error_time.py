@@ -105,7 +105,8 @@ def time_to(rows, who: str, reference_spp: int, target: float = 0.01) -> float:
     return float(max(a, 0.0) + b * spp_needed)
 
 
-def _seconds(t: float) -> str:
+def seconds_text(t: float) -> str:
+    """A time in seconds to three digits, "—" when it could not be measured."""
     return f"{t:.3g} s" if math.isfinite(t) else "—"
 
 
@@ -154,7 +155,7 @@ def section(ctx: Context) -> Section:
             bias = relative_rmse(refs["plugin"], refs["built-in"])
             shown = f"{ratio:.3f}×" if math.isfinite(ratio) else "— (too short to time)"
             s.values[f"time to 1 %: {label}, {scene_name}"] = shown
-            table.append((label, scene_name, _seconds(t_ours), _seconds(t_ref), f"**{shown}**",
+            table.append((label, scene_name, seconds_text(t_ours), seconds_text(t_ref), f"**{shown}**",
                           f"≤ {TARGET}" if targeted else "—", f"{bias:.4f}"))
             if targeted:
                 s.rows.append(Row(label, f"time to 1 % rel. RMSE, {scene_name}",

@@ -88,15 +88,16 @@ def _efficiency(ctx: Context, s: Section, label: str, merl, target) -> tuple:
                                  spps, ctx.n(96, 16), ctx.n(7, 2), reference_spp)
     times = {k: error_time.time_to(rows, k, reference_spp) for k in ("merl", "cosine")}
     ratio = times["cosine"] / times["merl"]
-    s.values[f"merl sampling vs cosine, time to 1 %: {label}"] = f"{ratio:.3g}×"
+    shown = f"{ratio:.3g}×" if math.isfinite(ratio) else "— (too short to time)"
+    s.values[f"merl sampling vs cosine, time to 1 %: {label}"] = shown
     s.values[f"merl sampling vs cosine, estimator efficiency: {label}"] = \
         f"{eff['sample()'] / eff['cosine']:.3g}×"
     if target:
         s.rows.append(Row(f"merl, {label}", "time to 1 % rel. RMSE, cosine sampling / merl's",
-                          f"{ratio:.3g}×", f"≥ {target:g}×", bool(ratio >= target)))
+                          shown, f"≥ {target:g}×", bool(ratio >= target)))
     return (label, f"{m['sample()'][0]:.3g}", f"{m['cosine'][0]:.3g}",
-            f"{eff['sample()'] / eff['cosine']:.3g}×", f"{times['merl']:.3g} s",
-            f"{times['cosine']:.3g} s", f"**{ratio:.3g}×**")
+            f"{eff['sample()'] / eff['cosine']:.3g}×", error_time.seconds_text(times["merl"]),
+            error_time.seconds_text(times["cosine"]), f"**{shown}**")
 
 
 def _cost(ctx: Context, s: Section, merl) -> tuple:
