@@ -13,15 +13,12 @@ from .core import Context, Section, run
 
 def sections() -> list:
     """The report's sections, in order."""
-    from . import (anisotropy, claims, cooktorrance, extremes, fits, lambert, orennayar, phong,
-                   transmission, ward)
-    from . import lafortune
-    from . import ashikhmin
-    from . import multiscatter
+    from . import (anisotropy, ashikhmin, claims, cooktorrance, extremes, fits, lafortune, lambert,
+                   measured, multiscatter, orennayar, phong, transmission, ward)
     return [lambert.section, phong.section, cooktorrance.section, anisotropy.section,
             transmission.section, multiscatter.section, ward.section, orennayar.section,
-            lafortune.section, ashikhmin.section, fits.section, claims.section,
-            extremes.section]
+            lafortune.section, ashikhmin.section, fits.section, measured.section,
+            claims.section, extremes.section]
 
 
 __all__ = ["Context", "Section", "run", "sections"]
