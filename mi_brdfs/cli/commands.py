@@ -186,7 +186,10 @@ def cmd_fit(args) -> int:
         from ..plots import pyplot
         pyplot()  # matplotlib missing: say so before the fit
     mi_brdfs.use_variant(args.variant, fallback=False)
-    (target,) = _one_bsdf(parse_cli(args.target), "TARGET")
+    targets = parse_cli(args.target)
+    if args.models and (len(targets) > 1 or args.scheduler or args.workers):
+        return _sweep(args, targets)
+    (target,) = _one_bsdf(targets, "TARGET")
     if args.models:
         return _fit_models(args, target)
     (model,) = _one_bsdf(parse_cli(args.model), "--model")
@@ -219,6 +222,28 @@ def _fit_models(args, target) -> int:
                       seed=args.seed, progress=not args.quiet)
     print(md_table(["model", *METRICS], ranking_table(done["scores"])))
     print("wrote " + ", ".join(done["written"]))
+    return 0
+
+
+def _sweep(args, targets) -> int:
+    """``mi-brdfs fit A.binary B.binary ... --models ...``: one task per (file, model)."""
+    from ..errors import MiBrdfsError
+    from ..fit.models import chosen
+    from ..fit.sweep import sweep
+
+    files = [t["filename"] for t in targets if isinstance(t, dict) and t["type"] == "merl"
+             and set(t) == {"type", "filename"}]
+    if len(files) != len(targets):
+        raise MiBrdfsError("a sweep (several TARGETs, --workers or --scheduler) takes MERL "
+                           ".binary files only")
+    names = chosen(args.models)
+    out = _report_folder(args, "sweep.md")
+    done = sweep(files, names, args.metric, out, pairs=args.pairs, steps=args.steps,
+                 seed=args.seed, workers=args.workers, scheduler=args.scheduler,
+                 progress=not args.quiet)
+    print(Path(done["written"][0]).read_text())
+    print(f"{done['computed']} fits computed, {len(done['results']) - done['computed']} from "
+          f"the cache; wrote " + ", ".join(done["written"]))
     return 0
 
 

@@ -256,6 +256,12 @@ def _add_fit(sub) -> None:
                             "and ranked), models.json, lobes.png and spheres.png")
     ft.add_argument("--out", metavar="DIR", default=".",
                     help="the folder of --models' report (default: the current folder)")
+    ft.add_argument("--workers", type=_count, metavar="N",
+                    help="with several TARGET files and --models: fits run at once, one process "
+                         "each (default: one per core)")
+    ft.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                    help="with --models: run the fits on this Dask cluster (pip install "
+                         "'mi-brdfs[sweep]'; see mi_brdfs.fit.sweep)")
     ft.add_argument("--free", metavar="P1,P2,...",
                     help="the parameters to fit, by name (default: all of MODEL's continuous ones)")
     ft.add_argument("-o", "--output", metavar="FIT.json", type=_output(".json"),

@@ -80,19 +80,32 @@ def chosen(names: str) -> list:
     return picked
 
 
-def scores(target, results: dict, pairs: int, seed: int) -> dict:
-    """{model: {metric: objective}}: every fit scored under every metric on the fit's pairs."""
+def score(target, fitted, pairs: int, seed: int) -> dict:
+    """{metric: objective} of the fitted spec ``fitted`` at the pairs a fit to ``target`` with
+    ``pairs`` and ``seed`` uses (the same pairs for every model)."""
     from ..bsdfspec import load_bsdf
     from ..checks import batch
 
-    target_bsdf = load_bsdf(target)
-    wi, wo, values = _target_values(target, target_bsdf, pairs, seed, [])
-    out = {}
-    for name, result in results.items():
-        fitted = batch.evaluate(load_bsdf(result.spec), wi, wo).value
-        out[name] = {m: objective_np(m, np.broadcast_to(fitted, values.shape), wi, wo, values)
-                     for m in METRICS}
-    return out
+    wi, wo, values = _target_values(target, load_bsdf(target), pairs, seed, [])
+    e = np.broadcast_to(batch.evaluate(load_bsdf(fitted), wi, wo).value, values.shape)
+    return {m: objective_np(m, e, wi, wo, values) for m in METRICS}
+
+
+def scores(target, results: dict, pairs: int, seed: int) -> dict:
+    """{model: {metric: objective}}: every fit scored under every metric on the fit's pairs."""
+    return {name: score(target, result.spec, pairs, seed) for name, result in results.items()}
+
+
+def fit_one(target, name: str, metric: str, pairs: int = 16384, steps: int = 800,
+            seed: int = 0, progress: bool = False):
+    """(FitResult, {metric: objective}): lecture model ``name`` fitted to ``target`` under
+    ``metric`` from its start (:func:`models_for`), and scored under every metric."""
+    from . import fit
+
+    (model, free), = [(m, f) for n, m, f in models_for(target) if n == name]
+    result = fit(target, model, free, pairs=pairs, steps=steps, seed=seed, metric=metric,
+                 progress=progress)
+    return result, score(target, result.spec, pairs, seed)
 
 
 def ranking_table(table: dict) -> list:
@@ -176,15 +189,11 @@ def fit_models(target, names: list, metric: str, out, *, pairs: int = 16384, ste
     metric, and write ``models.md``, ``models.json`` (and with ``figures`` ``lobes.png`` and
     ``spheres.png``) in the folder ``out``. Returns {'results', 'scores', 'written'}.
     """
-    from . import fit
-
     out = Path(out)
-    results = {}
-    for name, model, free in models_for(target):
-        if name in names:
-            results[name] = fit(target, model, free, pairs=pairs, steps=steps, seed=seed,
-                                metric=metric, progress=progress)
-    table = scores(target, results, pairs, seed)
+    out.mkdir(parents=True, exist_ok=True)
+    results, table = {}, {}
+    for name in [n for n in STYLES if n in names]:
+        results[name], table[name] = fit_one(target, name, metric, pairs, steps, seed, progress)
     drawn = {}
     if figures:
         drawn = {"lobes": plot_lobes(target, results, out / "lobes.png"),
@@ -193,5 +202,5 @@ def fit_models(target, names: list, metric: str, out, *, pairs: int = 16384, ste
     return {"results": results, "scores": table, "written": written}
 
 
-__all__ = ["LOBE_THETAS", "STYLES", "chosen", "fit_models", "models_for", "ranking_table",
-           "scores"]
+__all__ = ["LOBE_THETAS", "STYLES", "chosen", "fit_models", "fit_one", "models_for",
+           "ranking_table", "score", "scores"]
