@@ -33,6 +33,9 @@ models apart:
   of Reflectance Functions") over a Lambertian term, the coefficients C of the paper's cases:
   Phong's mirror lobe, an off-specular lobe leaning towards grazing angles (|Cz| < −Cx = −Cy)
   and a retro-reflective one (Cx = Cy > 0), which reflects the light back towards it.
+* ``merl``: measured data in MERL's format (Matusik et al. 2003, "A Data-Driven Reflectance
+  Model"), here Mitsuba's own BSDFs tabulated by the virtual gonioreflectometer
+  (``mi-brdfs measure``: a column's ``source``), read back by the plugin.
 
 The layout is fixed in pixels (:func:`layout`), so that the PNG's size follows from the rows,
 the columns and the tile resolution alone.
@@ -43,6 +46,7 @@ from __future__ import annotations
 import argparse
 import re
 import sys
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -147,6 +151,11 @@ ROWS: tuple[Row, ...] = (
                                      "exponent_0": 10.0}),
          ("retro, C = (1, 1, 1)", {"cx_0": 1.0, "cy_0": 1.0, "cz_0": 1.0,
                                    "exponent_0": 10.0}))),
+    Row("merl", "tabulated by mi-brdfs measure", {"type": "merl"},
+        (("roughconductor Au, GGX α = 0.1",
+          {"source": "roughconductor material=Au distribution=ggx alpha=0.1"}),
+         ("roughplastic", {"source": "roughplastic"}),
+         ("principled, roughness 0.4", {"source": "principled roughness=0.4"}))),
 )
 
 # The layout, in pixels (the PNG is written at DPI dots per inch, so 1 pt = DPI/72 px).
@@ -204,6 +213,19 @@ def _slug(text: str) -> str:
     return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-")
 
 
+def _tabulated(spec: dict, folder: Path) -> dict:
+    """A tile's spec, with a ``source`` BSDF tabulated in MERL's format into ``folder`` and
+    named as the ``merl`` plugin's file."""
+    if "source" not in spec:
+        return spec
+    from .measured.tabulate import measure
+
+    path = folder / f"{_slug(spec['source'])}.binary"
+    if not path.exists():
+        measure(spec["source"], path)
+    return {k: v for k, v in spec.items() if k != "source"} | {"filename": str(path)}
+
+
 def render_tiles(rows=ROWS, spp: int = DEFAULT_SPP, res: int = DEFAULT_RES, seed: int = 0,
                  exr_dir=None, progress: bool = True) -> Gallery:
     """
@@ -228,11 +250,12 @@ def render_tiles(rows=ROWS, spp: int = DEFAULT_SPP, res: int = DEFAULT_RES, seed
         exr_dir.mkdir(parents=True, exist_ok=True)
     total = sum(len(row.columns) for row in rows)
     bar = Progress(total, label="gallery", unit=" tiles") if progress else None
+    folder = tempfile.TemporaryDirectory()
     try:
         for row in rows:
             images = []
             for c, (title, _) in enumerate(row.columns):
-                spec = row.spec(c)
+                spec = _tabulated(row.spec(c), Path(folder.name))
                 scene = load_scene("material", bsdfs={"material": spec}, spp=spp, res=res)
                 image = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float32)
                 bad = int((~np.isfinite(image)).sum())
@@ -251,6 +274,7 @@ def render_tiles(rows=ROWS, spp: int = DEFAULT_SPP, res: int = DEFAULT_RES, seed
                                note=f"{row.title}, {title}")
             result.images.append(images)
     finally:
+        folder.cleanup()
         if bar:
             bar.close()
     result.seconds = time.perf_counter() - start

@@ -18,9 +18,13 @@ RES = 16
 
 
 def test01_every_plugin_and_form_has_a_row():
+    from mi_brdfs import registry
+
     plugins = {row.base["type"] for row in gallery.ROWS}
-    assert plugins == {"lambert", "phong", "cooktorrance", "ward", "orennayar", "ashikhmin",
-                       "lafortune"}
+    assert plugins == set(registry.PLUGINS)
+    merl = [row.spec(c) for row in gallery.ROWS if row.base["type"] == "merl"
+            for c in range(len(row.columns))]
+    assert merl and all("source" in spec for spec in merl)  # each tile tabulates its source
     forms = {(row.base["type"], row.base.get("form")) for row in gallery.ROWS}
     for form in ("normalized", "lecture", "original"):
         assert ("phong", form) in forms
