@@ -128,3 +128,29 @@ def test08_models_all_cli(ggx_file, tmp_path):
                        "--models phong,he: he is not a lecture model")
     cli_one_line_error(["fit", str(ggx_file), "--models", "all", "--model", "ward"],
                        "not allowed with argument")
+
+
+def test09_compare_published(tmp_path):
+    """Data tabulated from Ngan et al.'s published Ward fit of blue-acrylic: that preset
+    scores (near) 0 on it under every metric, another material's does not; a model without an
+    exact preset says why. The command takes the material's name from the file's."""
+    from mi_brdfs import presets
+    from mi_brdfs.fit.models import fit_models
+
+    path = tmp_path / "blue-acrylic.binary"
+    measure(presets.spec("ward", "ngan:blue-acrylic"), path, variant="llvm_ad_rgb")
+    sizes = dict(pairs=1024, steps=30, figures=False)
+    done = fit_models(str(path), ["ward", "ashikhmin"], "ngan", tmp_path, **sizes,
+                      compare_published="blue-acrylic")
+    theirs, why = done["published"]["ward"][0], done["published"]["ashikhmin"]
+    assert all(theirs[m] < 1e-4 * max(done["scores"]["ward"][m], 1e-12) + 1e-9
+               for m in METRICS), theirs
+    assert why[0] is None and "no exact form in ashikhmin" in why[1]
+    other = fit_models(str(path), ["ward"], "ngan", tmp_path / "o", **sizes,
+                       compare_published="gold-metallic-paint")["published"]["ward"][0]
+    assert other["ngan"] > 100 * (theirs["ngan"] + 1e-12)
+    p = run("fit", str(path), "--models", "ward", "--compare-published", "--pairs", "1024",
+            "--steps", "20", "-q", "--out", str(tmp_path / "cli"))
+    assert p.returncode == 0, p.stderr
+    assert "| ward | " in p.stdout and "published / ours" in p.stdout
+    assert "blue-acrylic" in (tmp_path / "cli" / "models.md").read_text()

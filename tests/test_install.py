@@ -75,3 +75,19 @@ def _the_command_renders_the_bundled_showcase(installed):
     image, _ = read_exr(out)
     assert image.shape[:2] == (16, 16) and np.isfinite(image).all() and image.mean() > 0
     assert out.with_suffix(".png").is_file()
+
+
+def test02_the_wheel_carries_the_fits_and_their_licence(installed):
+    """mi_brdfs/data/ngan (bbm's fit files, its BSD licence, the README naming the source)
+    is in the wheel, and the installed package reads it."""
+    import zipfile
+
+    python, _, tmp = installed
+    wheel = next((tmp / "dist").glob("mi_brdfs-*.whl"))
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for name in ("LICENSE", "README.md", "ngan_ward.fit", "ngan_he.fit"):
+        assert f"mi_brdfs/data/ngan/{name}" in names, name
+    code = ("from mi_brdfs import presets; print(presets.DATA); print(len(presets.materials())); "
+            "print(presets.spec('ward', 'ngan:nickel')['form'])")
+    out = _run([str(python), "-c", code], cwd=tmp).stdout.splitlines()
+    assert str(tmp) in out[0] and out[1:] == ["86", "original"]

@@ -209,7 +209,7 @@ def cmd_fit(args) -> int:
 def _fit_models(args, target) -> int:
     """``mi-brdfs fit TARGET --models ...``."""
     from ..errors import MiBrdfsError
-    from ..fit.models import chosen, fit_models, ranking_table
+    from ..fit.models import chosen, fit_models, published_table, ranking_table
     from ..fit.optimise import METRICS
     from ..markdown import md_table
 
@@ -217,10 +217,19 @@ def _fit_models(args, target) -> int:
     if args.free or args.output or args.plot:
         raise MiBrdfsError("--models writes its own report (--out DIR): --free, -o and --plot "
                            "go with --model")
+    material = args.compare_published
+    if material == "":  # the name of the MERL file
+        if not (isinstance(target, dict) and target["type"] == "merl"):
+            raise MiBrdfsError("--compare-published without a MATERIAL needs a MERL .binary "
+                               "TARGET, whose file name is the material's")
+        material = Path(target["filename"]).stem
     out = _report_folder(args, "models.md")
     done = fit_models(target, names, args.metric, out, pairs=args.pairs, steps=args.steps,
-                      seed=args.seed, progress=not args.quiet)
+                      seed=args.seed, progress=not args.quiet, compare_published=material)
     print(md_table(["model", *METRICS], ranking_table(done["scores"])))
+    if done["published"] is not None:
+        print(md_table(["model", f"ours ({args.metric})", "published", "published / ours"],
+                       published_table(done["scores"], done["published"], args.metric)))
     print("wrote " + ", ".join(done["written"]))
     return 0
 

@@ -256,6 +256,9 @@ def _add_fit(sub) -> None:
                             "and ranked), models.json, lobes.png and spheres.png")
     ft.add_argument("--out", metavar="DIR", default=".",
                     help="the folder of --models' report (default: the current folder)")
+    ft.add_argument("--compare-published", nargs="?", const="", metavar="MATERIAL",
+                    help="with --models: score Ngan et al.'s 2005 published fits of MATERIAL (a "
+                         "MERL material's name; default: the TARGET file's name) beside ours")
     ft.add_argument("--workers", type=_count, metavar="N",
                     help="with several TARGET files and --models: fits run at once, one process "
                          "each (default: one per core)")

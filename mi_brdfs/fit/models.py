@@ -108,6 +108,37 @@ def fit_one(target, name: str, metric: str, pairs: int = 16384, steps: int = 800
     return result, score(target, result.spec, pairs, seed)
 
 
+def published(target, names: list, material: str, pairs: int, seed: int) -> dict:
+    """{model: ({metric: objective}, spec) or (None, why)}: Ngan et al.'s (2005) published fit
+    of ``material`` for each model (the ``ngan:`` presets, :mod:`mi_brdfs.presets`), scored on
+    the pairs of the fits to ``target``; why, where a model has no exact preset."""
+    from .. import presets
+    from ..errors import MiBrdfsError
+
+    out = {}
+    for name in names:
+        try:
+            spec = presets.spec(name, f"{presets.SOURCE}:{material}")
+        except MiBrdfsError as e:
+            out[name] = (None, str(e).split(" is invalid: ", 1)[-1])
+            continue
+        out[name] = (score(target, spec, pairs, seed), spec)
+    return out
+
+
+def published_table(table: dict, theirs: dict, metric: str) -> list:
+    """Rows (model, ours, Ngan's published, ratio) under ``metric``."""
+    rows = []
+    for name, ours in table.items():
+        scores_, spec = theirs.get(name, (None, "not compared"))
+        if scores_ is None:  # the whole reason is in models.json
+            rows.append((name, f"{ours[metric]:.4g}", "—", spec.split(":")[0].split(", ")[0]))
+        else:
+            rows.append((name, f"{ours[metric]:.4g}", f"{scores_[metric]:.4g}",
+                         f"{scores_[metric] / ours[metric]:.3g}×"))
+    return rows
+
+
 def ranking_table(table: dict) -> list:
     """Rows (model, then per metric 'objective (rank)'), ranked by each metric's column."""
     ranks = {m: {name: i + 1 for i, name in enumerate(sorted(table, key=lambda n: table[n][m]))}
@@ -156,8 +187,9 @@ def sphere_row(target, results: dict, path, spp: int = 64, res: int = 128) -> st
 
 
 def write_report(target, results: dict, table: dict, metric: str, out: Path,
-                 figures: dict) -> list:
-    """models.md and models.json in ``out``; returns the paths written."""
+                 figures: dict, theirs: dict | None = None, material: str = "") -> list:
+    """models.md and models.json in ``out`` (with ``theirs``, Ngan's published fits of
+    ``material`` beside ours); returns the paths written."""
     from ..markdown import md_table
     from ..imageio import atomic_path
 
@@ -169,13 +201,23 @@ def write_report(target, results: dict, table: dict, metric: str, out: Path,
                       [(n, f"`{r.command_line()}`", f"{r.residual_projected:.3g}",
                         f"{r.albedo_error:.3f} (θ = {r.albedo_theta:g}°)")
                        for n, r in results.items()]), ""]
+    if theirs is not None:
+        lines += [f"Ngan et al.'s (2005) published fits of `{material}` (the `ngan:` presets), "
+                  f"scored on the same pairs under `{metric}`, beside ours (their objective "
+                  "over ours; where a model has no exact preset, why):", "",
+                  md_table(["model", "ours", "published", "published / ours"],
+                           published_table(table, theirs, metric)), ""]
     lines += [f"![{k}]({Path(v).name})" for k, v in figures.items()]
     written = []
     for name, text in (("models.md", "\n".join(lines) + "\n"),
                        ("models.json", json.dumps({
                            "target": spec_text(target), "metric": metric,
                            "scores": table, "fits": {n: r.to_json() for n, r in
-                                                     results.items()}}, indent=2))):
+                                                     results.items()},
+                           "published": {n: {"material": material, "scores": v[0],
+                                             "spec" if v[0] else "why": v[1]}
+                                         for n, v in (theirs or {}).items()}},
+                          indent=2, default=str))):
         with atomic_path(out / name, Path(name).suffix) as tmp:
             Path(tmp).write_text(text)
         written.append(str(out / name))
@@ -183,24 +225,30 @@ def write_report(target, results: dict, table: dict, metric: str, out: Path,
 
 
 def fit_models(target, names: list, metric: str, out, *, pairs: int = 16384, steps: int = 800,
-               seed: int = 0, figures: bool = True, progress: bool = False) -> dict:
+               seed: int = 0, figures: bool = True, progress: bool = False,
+               compare_published: str | None = None) -> dict:
     """
     Fit the lecture models ``names`` to ``target`` under ``metric``, score them under every
     metric, and write ``models.md``, ``models.json`` (and with ``figures`` ``lobes.png`` and
-    ``spheres.png``) in the folder ``out``. Returns {'results', 'scores', 'written'}.
+    ``spheres.png``) in the folder ``out``; with ``compare_published`` (a MERL material's name)
+    Ngan et al.'s published fits of it are scored beside. Returns {'results', 'scores',
+    'published', 'written'}.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     results, table = {}, {}
     for name in [n for n in STYLES if n in names]:
         results[name], table[name] = fit_one(target, name, metric, pairs, steps, seed, progress)
+    theirs = None if compare_published is None else \
+        published(target, list(results), compare_published, pairs, seed)
     drawn = {}
     if figures:
         drawn = {"lobes": plot_lobes(target, results, out / "lobes.png"),
                  "spheres": sphere_row(target, results, out / "spheres.png")}
-    written = write_report(target, results, table, metric, out, drawn) + list(drawn.values())
-    return {"results": results, "scores": table, "written": written}
+    written = write_report(target, results, table, metric, out, drawn, theirs,
+                           compare_published or "") + list(drawn.values())
+    return {"results": results, "scores": table, "published": theirs, "written": written}
 
 
 __all__ = ["LOBE_THETAS", "STYLES", "chosen", "fit_models", "fit_one", "models_for",
-           "ranking_table", "score", "scores"]
+           "published", "published_table", "ranking_table", "score", "scores"]

@@ -127,6 +127,14 @@ class Ashikhmin(mi.BSDF):
        - Rd, the substrate's albedo, finite and within [0, 1] (Default: 0.5)
        - |exposed|, |differentiable|
 
+     * - preset
+       - |string|
+       - A published fit that fills every parameter the scene does not give (explicit ones
+         win). ``ngan:<material>`` names Ngan et al. 2005's Ashikhmin-Shirley fit, which has
+         no exact form in this plugin: the error says what differs (docs/presets.md)
+         (Default: none)
+       -
+
     With k1 = ωi, k2 = ωo, h their half vector at azimuth φh and k·h = ωi·h
     (Ashikhmin & Shirley 2000, the specular and the diffuse term):
 
@@ -190,6 +198,7 @@ class Ashikhmin(mi.BSDF):
 
     def __init__(self, props):
         super().__init__(props)
+        properties.preset(props, PLUGIN)  # a preset's parameters, where the scene gives none
         #: Exponents along the tangent and the bitangent: one texture twice when isotropic.
         names, exponents = properties.isotropic_or_pair(props, PLUGIN, "exponent", ("nu", "nv"),
                                                         100.0, hi=terms.EXPONENT_MAX)

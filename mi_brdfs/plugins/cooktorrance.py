@@ -260,6 +260,14 @@ class CookTorrance(mi.BSDF):
        - With ``transmission``: factor on the refraction lobe, within [0, 1] (Default: 1.0)
        - |exposed|, |differentiable|
 
+     * - preset
+       - |string|
+       - A published fit that fills every parameter the scene does not give (explicit ones
+         win): ``ngan:<material>``, Ngan et al. 2005's Cook-Torrance fit to a MERL material
+         (``beckmann``, ``vcavity``, ``schlick``, a diffuse base); docs/presets.md lists the
+         materials and the conversion (Default: none)
+       -
+
     The model of the lectures, in Walter et al.'s normalisation:
 
     .. math::
@@ -382,6 +390,7 @@ class CookTorrance(mi.BSDF):
 
     def __init__(self, props):
         super().__init__(props)
+        properties.preset(props, PLUGIN)  # a preset's parameters, where the scene gives none
         #: Roughness α (Beckmann: RMS slope) along the tangent and the bitangent: the same
         #: texture when isotropic.
         self.m_alpha_u, self.m_alpha_v = properties.roughness(props, PLUGIN)

@@ -158,6 +158,14 @@ class Lafortune(mi.BSDF):
          (Default: ``true``)
        -
 
+     * - preset
+       - |string|
+       - A published fit that fills every parameter the scene does not give (explicit ones
+         win): ``ngan:<material>``, Ngan et al. 2005's one-lobe Lafortune fit to a MERL
+         material (lobe 0, ``normalize`` true); docs/presets.md lists the materials and the
+         conversion (Default: none)
+       -
+
     The lobes are numbered 0, 1, 2, … (decimal, no leading zero: ``cx_01`` is an error); their
     count is one more than the largest index given (one lobe, lobe 0, when none is given).
     Every lobe up to it needs at least one property of its own: a gap (``cx_1``, ``cy_1``,
@@ -234,6 +242,7 @@ class Lafortune(mi.BSDF):
 
     def __init__(self, props):
         super().__init__(props)
+        properties.preset(props, PLUGIN)  # a preset's parameters, where the scene gives none
         #: ``true``: Phong's normalisation per lobe; ``false``: the paper's form
         self.m_normalize = properties.boolean(props, PLUGIN, "normalize", True)
         self.m_diffuse_reflectance = properties.reflectance(props, PLUGIN,

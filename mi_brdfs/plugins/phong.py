@@ -140,6 +140,14 @@ class Phong(mi.BSDF):
          (Default: ``mirror``)
        -
 
+     * - preset
+       - |string|
+       - A published fit that fills every parameter the scene does not give (explicit ones
+         win): ``ngan:<material>``, Ngan et al. 2005's Blinn-Phong fit to a MERL material
+         (``lobe`` ``halfway``, ``form`` ``normalized``); docs/presets.md lists the materials
+         and the conversion (Default: none)
+       -
+
     With L the direction towards the light, V towards the viewer, R the mirror image of L
     and H = (L + V)/‖L + V‖:
 
@@ -209,6 +217,7 @@ class Phong(mi.BSDF):
 
     def __init__(self, props):
         super().__init__(props)
+        properties.preset(props, PLUGIN)  # a preset's parameters, where the scene gives none
         properties.reject(props, PLUGIN, "ambient", AMBIENT_HINT)
         #: ``normalized``, ``lecture`` or ``original``
         self.m_form = properties.choice(props, PLUGIN, "form", "normalized", terms.FORMS)

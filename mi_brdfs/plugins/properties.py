@@ -18,6 +18,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .. import presets
 from ..errors import Description, ParameterError
 from ..scattering.microfacet import ALPHA_MIN
 
@@ -315,6 +316,24 @@ def boolean(props, plugin: str, name: str, default: bool) -> bool:
     if not isinstance(value, bool):
         raise ParameterError(plugin, name, value, "must be a boolean (true or false)")
     return value
+
+
+def preset(props, plugin: str) -> None:
+    """
+    Fill in, on ``props`` itself, every parameter the ``preset`` property defines that the
+    scene does not give (explicit parameters win; :func:`mi_brdfs.presets.missing`), before
+    the plugin reads its properties: called first in each plugin's ``__init__``. No
+    ``preset``: nothing changes. RGB values become ``<rgb>`` properties.
+    """
+    if "preset" not in props:
+        return
+    value = props["preset"]
+    if not isinstance(value, str):
+        raise ParameterError(plugin, "preset", value,
+                             'must be a string such as "ngan:gold-metallic-paint"')
+    given = [key for key in props.keys() if key != "preset"]
+    for name, entry in presets.missing(plugin, value, given).items():
+        props[name] = mi.ScalarColor3f(*entry) if isinstance(entry, tuple) else entry
 
 
 def reject(props, plugin: str, name: str, hint: str) -> None:

@@ -91,6 +91,14 @@ class Ward(mi.BSDF):
          Dür 2010) (Default: ``balanced``, as Mitsuba 0.6's ``ward``)
        -
 
+     * - preset
+       - |string|
+       - A published fit that fills every parameter the scene does not give (explicit ones
+         win): ``ngan:<material>``, Ngan et al. 2005's Ward fit to a MERL material (``form``
+         ``original``), or ``ngan-wardduer:<material>``, their Ward-Dür fit (``form``
+         ``duer``); docs/presets.md lists the materials and the conversion (Default: none)
+       -
+
     With h = ωi + ωo (not normalised) and E = exp(−(hx²/αu² + hy²/αv²)/hz²):
 
     .. math::
@@ -143,6 +151,7 @@ class Ward(mi.BSDF):
 
     def __init__(self, props):
         super().__init__(props)
+        properties.preset(props, PLUGIN)  # a preset's parameters, where the scene gives none
         #: Lobe width along the tangent and the bitangent: the same texture when isotropic.
         self.m_alpha_u, self.m_alpha_v = properties.roughness(props, PLUGIN)
         self.m_anisotropic = self.m_alpha_u is not self.m_alpha_v

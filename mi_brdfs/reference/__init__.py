@@ -1,7 +1,8 @@
 """
 Float64 NumPy reference implementations of the package's models: the oracle for the tests and
 the validation campaign, written independently of the plugins. The models (``lambert.py``,
-``phong.py``, ``cooktorrance.py``, ``ward.py``, ``orennayar.py``, ``quadrature.py``) use NumPy
+``phong.py``, ``cooktorrance.py``, ``ward.py``, ``orennayar.py``, ``quadrature.py``, and
+``ngan.py``: the models of Ngan et al.'s fits as bbm defines them) use NumPy
 alone; only :func:`for_spec` and :func:`color` here ask Mitsuba which variant is set (RGB
 colours mean something else in spectral variants) and parse specs through
 :mod:`mi_brdfs.bsdfspec`.
@@ -55,12 +56,18 @@ def for_spec(spec):
     """
     The float64 reference of a BSDF spec in any form (:mod:`mi_brdfs.bsdfspec`), or None where
     the package has none (for a spec that is not a dict once parsed: XML, a loaded mi.BSDF).
+    A ``preset`` stands for the parameters it gives the plugin (:func:`mi_brdfs.presets.spec`;
+    the spec's own parameters win, as in a scene).
     """
     from ..bsdfspec import parse
 
     spec = parse(spec)
     if not isinstance(spec, dict):
         return None
+    if "preset" in spec:  # the parameters the plugin takes from it (mi_brdfs.presets)
+        from ..presets import spec as preset_spec
+        given = {k: v for k, v in spec.items() if k not in ("type", "preset")}
+        spec = preset_spec(spec["type"], spec["preset"], **given)
     kind = spec.get("type")
     if kind in ("lambert", "diffuse"):
         rho = color(spec.get("reflectance"), 0.5)
