@@ -2,7 +2,8 @@
 Float64 NumPy reference implementations of the package's models: the oracle for the tests and
 the validation campaign, written independently of the plugins. The models (``lambert.py``,
 ``phong.py``, ``cooktorrance.py``, ``ward.py``, ``orennayar.py``, ``quadrature.py``, and
-``ngan.py``: the models of Ngan et al.'s fits as bbm defines them) use NumPy
+``ngan.py``: the models of Ngan et al.'s fits as bbm defines them,
+``he.py``: He, Torrance, Sillion & Greenberg 1991 in three readings, no plugin yet) use NumPy
 alone; only :func:`for_spec` and :func:`color` here ask Mitsuba which variant is set (RGB
 colours mean something else in spectral variants) and parse specs through
 :mod:`mi_brdfs.bsdfspec`.
