@@ -27,6 +27,8 @@ class Measured(NamedTuple):
     #: The sampler's density and its θi nodes (:func:`.warp.density`).
     density: np.ndarray
     thetas: list
+    #: (path, modification time in ns, size): which version of which file this is.
+    stamp: tuple
 
 
 def load(path) -> Measured:
@@ -49,4 +51,4 @@ def _load(path: str, mtime_ns: int, size: int) -> Measured:
     values = np.nan_to_num(values, nan=0.0)
     density, thetas = warp.density(lambda wi, wo: merl.interpolate(values, wi, wo).mean(axis=-1))
     rgb = np.moveaxis(values, 0, -1).reshape(-1, 3).astype(np.float32)
-    return Measured(rgb, unmeasured, density, thetas)
+    return Measured(rgb, unmeasured, density, thetas, (path, mtime_ns, size))

@@ -22,8 +22,9 @@ PLUGIN = "merl"
 #: Distributions") that keeps the density positive wherever f is, whatever the table missed.
 COSINE_SHARE = 0.1
 
-#: The tables of each file in this variant (this module runs once per variant): every
-#: instance that names a file shares them.
+#: The tables of each file in this variant (this module runs once per variant), by the file's
+#: path, modification time and size: every instance that names a file shares them, and a file
+#: rewritten since is read again.
 _tables: dict = {}
 
 
@@ -200,9 +201,9 @@ class Merl(mi.BSDF):
         #: The factor on f.
         self.m_scale = properties.texture(props, PLUGIN, "scale", 1.0, 0.0, math.inf)
         measured = data.load(self.filename)
-        if self.filename not in _tables:
-            _tables[self.filename] = Table(measured)
-        self.table = _tables[self.filename]
+        if measured.stamp not in _tables:
+            _tables[measured.stamp] = Table(measured)
+        self.table = _tables[measured.stamp]
         if measured.unmeasured:
             properties.warn(PLUGIN, f"{self.filename}: {measured.unmeasured} of "
                             f"{measured.rgb.shape[0]} bins unmeasured, evaluated as 0")

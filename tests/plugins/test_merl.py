@@ -7,6 +7,8 @@ the sampler (χ², consistency, a sampler whose pdf is off rejected, its efficie
 cosine); the scale through mi.traverse; one load per file; one-line errors.
 """
 
+import os
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -212,10 +214,22 @@ def test11_scale_through_traverse(variant_llvm_ad_rgb, np_rng):
     assert not params.flags("scale.value") & int(mi.ParamFlags.NonDifferentiable)
 
 
-def test12_one_load_per_file(variants_rgb):
-    """Two instances naming the file share one table; the file is read once per process."""
+def test12_one_load_per_file(variants_rgb, tmp_path):
+    """Two instances naming the file share one table; the file is read once per process; a
+    file rewritten since is read again (its new values, not the old table's)."""
     before = data._load.cache_info()
     a, b = mi.load_dict(_spec()), mi.load_dict(_spec(filter_type="nearest"))
     assert a.table is b.table
     after = data._load.cache_info()
     assert after.misses - before.misses <= 1 and after.hits - before.hits >= 1
+    path = tmp_path / "changing.binary"
+    values = merl.read(merl_file())
+    merl.write(path, values)
+    first = mi.load_dict(_spec(filename=str(path)))
+    merl.write(path, values * 2.0)
+    os.utime(path, ns=(1, 1))  # a different modification time, whatever the clock's step
+    second = mi.load_dict(_spec(filename=str(path)))
+    assert second.table is not first.table
+    wi, wo = np.array([[0.3, 0.0, 0.954]]), np.array([[-0.3, 0.0, 0.954]])
+    np.testing.assert_allclose(eval_pdf(second, wi, wo)[0], 2 * eval_pdf(first, wi, wo)[0],
+                               rtol=1e-6)
