@@ -64,9 +64,12 @@ class Table:
         """f in bin ``index`` (flat) as ``UnpolarizedSpectrum`` at ``si.wavelengths``."""
         if isinstance(index, int):
             c = [float(x) for x in self.buffer[index]]
-        else:
-            c = [dr.gather(mi.Float, self.buffer, index * self.channels + k)
-                 for k in range(self.channels)]
+        elif self.channels == 1:
+            c = [dr.gather(mi.Float, self.buffer, index)]
+        else:  # one packed gather of the bin's row
+            row = dr.gather(mi.Vector3f if self.channels == 3 else mi.Vector4f, self.buffer,
+                            index)
+            c = [row[k] for k in range(self.channels)]
         if mi.is_spectral:
             return mi.srgb_model_eval(mi.Vector3f(c[0], c[1], c[2]), si.wavelengths) * c[3]
         return mi.UnpolarizedSpectrum(c[0] if mi.is_monochromatic else mi.Color3f(*c))
