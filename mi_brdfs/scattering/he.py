@@ -21,7 +21,7 @@ the Poisson weights g^m e^(−g)/m! concentrate. Against the converged float64 s
 a window leaves is below 10⁻⁶ up to g = 22 for 48 terms from m = 1 (``westin`` needs g ≤ 18.5,
 beyond which it takes Beckmann's asymptote), and up to g = 163 for 128 terms centred (the
 ``paper`` reading's default; raise ``terms`` for rougher surfaces):
-``tests/scattering/test_he.py::test02_the_paper_reading_and_where_its_window_stops``.
+``tests/scattering/test_he_terms.py::test02_the_paper_reading_and_where_its_window_stops``.
 """
 
 from __future__ import annotations
