@@ -91,11 +91,6 @@ def score(target, fitted, pairs: int, seed: int) -> dict:
     return {m: objective_np(m, e, wi, wo, values) for m in METRICS}
 
 
-def scores(target, results: dict, pairs: int, seed: int) -> dict:
-    """{model: {metric: objective}}: every fit scored under every metric on the fit's pairs."""
-    return {name: score(target, result.spec, pairs, seed) for name, result in results.items()}
-
-
 def fit_one(target, name: str, metric: str, pairs: int = 16384, steps: int = 800,
             seed: int = 0, progress: bool = False):
     """(FitResult, {metric: objective}): lecture model ``name`` fitted to ``target`` under
@@ -251,4 +246,4 @@ def fit_models(target, names: list, metric: str, out, *, pairs: int = 16384, ste
 
 
 __all__ = ["LOBE_THETAS", "STYLES", "chosen", "fit_models", "fit_one", "models_for",
-           "published", "published_table", "ranking_table", "score", "scores"]
+           "published", "published_table", "ranking_table", "score"]
