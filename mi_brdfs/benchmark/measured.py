@@ -175,7 +175,7 @@ def section(ctx: Context) -> Section:
         costs = _fit_costs(ctx, s, Path(folder), files)
     s.markdown = "\n".join([
         "The `merl` plugin on materials of known BSDFs tabulated by `mi-brdfs measure`. Its "
-        "sampler (through the half vector, with one sample in ten from the cosine) against "
+        "sampler (through the half vector, a tenth of its density the cosine's) against "
         "the cosine-weighted hemisphere alone (the same BSDF evaluated, "
         f"`benchmark.measured.{COSINE}`): the variance per sample of the albedo estimator and "
         "its efficiency 1/(variance × time) (Sampling strategies' method, averaged over "

@@ -14,8 +14,19 @@ pdf(ωo) = p(u, v | θi) / J with
 the reflection's Jacobian 4(ωi·h) (Walter et al. 2007, eq. 14), the sphere's sinθh and the
 warping's dθh/du = πu and dφh/dv = 2π.
 
+The density is a defensive mixture (Hesterberg 1995, "Weighted Average Importance Sampling and
+Defensive Mixture Distributions"): :data:`DEFENSIVE_SHARE` of it is the cosine-weighted
+hemisphere's density carried into the square, cosθo·J at the valid nodes and a little of
+|cosθo·J| at the others (so that every cell touching the valid region has positive corners):
+the pdf is positive wherever f is,
+whatever the grid missed, and the weight f·cosθo/pdf stays bounded. Mixed inside the table,
+the sampler's own density is the whole pdf: one draw, and no second density to evaluate at the
+sample.
+
 The density is built in float64 NumPy (:func:`density`); :func:`to_direction` and
-:func:`to_square` are the map and its inverse in drjit for every variant.
+:func:`to_square` are the map and its inverse in drjit for every variant, and :class:`Sampler`
+samples a density and evaluates it in any variant: the sampler of measured data (``merl``)
+and of models whose lobe has no sampler of its own (``he``'s directional diffuse term).
 """
 
 from __future__ import annotations
@@ -27,13 +38,25 @@ import numpy as np
 from .lookup import azimuth
 
 #: Nodes of the density: incident angles θi in [0, π/2], and the (u, v) grid.
-N_THETA, N_U, N_V = 24, 128, 64
+N_THETA, N_U, N_V = 16, 64, 32
+#: The share of the density that is the cosine's (the defensive part).
+DEFENSIVE_SHARE = 0.1
+#: The cosine part's weight at nodes outside the valid region, relative to |cosθo·J| there:
+#: enough to make every cell touching the valid region positive, little enough that few
+#: samples land outside it (each is a failed sample, weight 0).
+OUTSIDE = 1e-3
 
 
 def forward(theta_i, u, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(ωi, ωo, J) in float64 for ωi at θi in the xz-plane (φi = 0) and (u, v) in the square:
     the map :func:`to_direction` computes in drjit, and its Jacobian (0 where ωo is not valid:
     ωi·h ≤ 0 or ωo below the surface)."""
+    wi, wo, jac = _forward(theta_i, u, v)
+    return wi, wo, np.where((jac > 0) & (wo[..., 2] > 0), jac, 0.0)
+
+
+def _forward(theta_i, u, v):
+    """(ωi, ωo, J) of :func:`forward`, J not masked (negative where ωi·h < 0)."""
     theta_i, u, v = np.broadcast_arrays(*(np.asarray(a, np.float64) for a in (theta_i, u, v)))
     wi = np.stack([np.sin(theta_i), np.zeros_like(theta_i), np.cos(theta_i)], axis=-1)
     theta_h, phi_h = np.pi / 2 * u * u, np.pi * (2.0 * v - 1.0)
@@ -41,17 +64,24 @@ def forward(theta_i, u, v) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                   np.cos(theta_h)], axis=-1)
     cos_d = np.sum(wi * h, axis=-1)
     wo = 2.0 * cos_d[..., None] * h - wi
-    jac = 8.0 * np.pi ** 2 * cos_d * np.sin(theta_h) * u
-    return wi, wo, np.where((cos_d > 0) & (wo[..., 2] > 0), jac, 0.0)
+    return wi, wo, 8.0 * np.pi ** 2 * cos_d * np.sin(theta_h) * u
+
+
+def _mean_one(value):
+    """``value`` (θi, v, u) divided by its mean over each θi node's grid (NaN where that is
+    0)."""
+    mean = value.mean(axis=(1, 2), keepdims=True)
+    return np.where(mean > 0, value / np.where(mean > 0, mean, 1.0), np.nan)
 
 
 def density(f_mean) -> tuple[np.ndarray, list[float]]:
     """
-    (data, θi nodes) for ``MarginalContinuous2D1``: data[t, b, a] = f·cosθo·J at θi node t and
-    (u, v) = (a/(N_U − 1), b/(N_V − 1)), float32, where ``f_mean(wi, wo)`` is f (the mean over
+    (data, θi nodes) for ``MarginalContinuous2D1``: at θi node t and (u, v) = (a/(N_U − 1),
+    b/(N_V − 1)), data[t, b, a] is f·cosθo·J and, its :data:`DEFENSIVE_SHARE`, cosθo·J
+    (:data:`OUTSIDE` times |cosθo·J| at invalid nodes), each normalised to mean 1 over the
+    nodes; float32. ``f_mean(wi, wo)`` is f (the mean over
     channels) at (n, 3) direction pairs. The last node sits just under the horizon's θi = π/2,
-    where f·cosθo would be 0 everywhere; a node where f is 0 everywhere is uniform instead,
-    so that every θi has a density.
+    where f·cosθo would be 0 everywhere; a node where f is 0 everywhere is the cosine's alone.
     """
     thetas = np.linspace(0.0, np.pi / 2, N_THETA)
     t, v, u = np.meshgrid(np.minimum(thetas, np.pi / 2 - 1e-3), np.linspace(0, 1, N_V),
@@ -60,9 +90,13 @@ def density(f_mean) -> tuple[np.ndarray, list[float]]:
     valid = jac > 0
     value = np.zeros(t.shape)
     value[valid] = np.maximum(f_mean(wi[valid], wo[valid]), 0.0) * wo[valid][:, 2] * jac[valid]
-    empty = value.reshape(N_THETA, -1).sum(axis=1) <= 0
-    value[empty] = 1.0
-    return value.astype(np.float32), [float(x) for x in thetas]
+    _, wo_any, jac_any = _forward(t, u, v)
+    cosine = np.abs(wo_any[..., 2] * jac_any)
+    cosine = _mean_one(np.where(valid, cosine, OUTSIDE * cosine))
+    value = _mean_one(value)
+    mixed = (1.0 - DEFENSIVE_SHARE) * value + DEFENSIVE_SHARE * cosine
+    return np.where(np.isnan(value), cosine, mixed).astype(np.float32), \
+        [float(x) for x in thetas]
 
 
 def theta(w):
@@ -102,3 +136,27 @@ def to_square(wi, wo) -> tuple:
     cos_d = dr.dot(wi, h)
     return mi.Point2f(dr.minimum(u, 1.0), dr.clip(v, 0.0, 1.0)), \
         dr.maximum(_jacobian(u, sin_h, cos_d), 0.0)
+
+
+class Sampler:
+    """A density of :func:`density` sampled in the current variant (Mitsuba's
+    ``MarginalContinuous2D1``): :meth:`pdf` at a direction, :meth:`sample` one with its
+    density."""
+
+    def __init__(self, data: np.ndarray, thetas: list):
+        self.table = mi.MarginalContinuous2D1(data, [thetas])
+
+    def pdf(self, wi, wo, active):
+        """The density of :meth:`sample` at ωo (solid angle)."""
+        uv, jac = to_square(wi, wo)
+        p = self.table.eval(uv, [theta(wi)], active)
+        ok = active & (jac > 0)
+        return dr.select(ok, p / dr.select(ok, jac, 1.0), 0.0)
+
+    def sample(self, wi, sample2, active):
+        """(ωo, its density, valid): one draw; the density comes with it, the same as
+        :meth:`pdf` at ωo up to rounding."""
+        uv, p = self.table.sample(sample2, [theta(wi)], active)
+        wo, jac, valid = to_direction(wi, uv)
+        ok = valid & (jac > 0)
+        return wo, dr.select(ok, p / dr.select(ok, jac, 1.0), 0.0), ok

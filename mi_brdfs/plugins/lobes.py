@@ -92,6 +92,8 @@ class Lobe:
     component: int = 0
     kind: str = "DiffuseReflection"
     flags: int = 0
+    #: A delta lobe (:class:`DeltaLobe`): its density is a probability mass, not a density.
+    delta: bool = False
 
     def enabled(self, ctx) -> bool:
         """Whether the context asks for this lobe (a Python bool: configuration)."""
@@ -127,9 +129,53 @@ class Lobe:
         value, pdf = self.eval_pdf(ctx, si, wo, active)
         return weight(value, pdf, active), pdf
 
+    def sample_alone(self, ctx, si, sample1, sample2, active):
+        """(ωo, valid, f·|cosθo|/pdf, pdf) when the lobe is sampled alone: :meth:`sample`, then
+        :meth:`sample_weight`; a lobe whose sampler returns its density with ωo (a tabulated
+        one) gives both at once here."""
+        wo, valid = self.sample(ctx, si, sample1, sample2, active)
+        active = active & valid
+        if none(active):
+            return wo, valid, mi.Spectrum(0.0), mi.Float(0.0)
+        value, pdf = self.sample_weight(ctx, si, wo, active)
+        return wo, valid, value, pdf
+
     def diffuse_reflectance(self, si, active):
         """The albedo of a diffuse term (``eval_diffuse_reflectance``), None for other lobes."""
         return None
+
+
+class DeltaLobe(Lobe):
+    """
+    A lobe concentrated in one direction (a smooth surface's mirror reflection): f is a Dirac
+    delta, so :meth:`eval_pdf` is 0 at every direction a caller can name, and a sample of it
+    has the discrete probability of being picked as its ``bs.pdf`` and the lobe's weight over
+    that probability as its sample weight (Mitsuba's ``plastic``: ``bs.pdf`` = the specular
+    sampling probability). Subclasses give :meth:`delta_value`, ∫ f·cosθo dωo over the delta.
+    """
+
+    delta = True
+
+    def delta_value(self, si, active):
+        """The reflectance of the delta at ωi (a spectrum): the sample weight when the lobe is
+        sampled alone."""
+        raise NotImplementedError
+
+    def eval_pdf(self, ctx, si, wo, active):
+        return mi.Spectrum(0.0), mi.Float(0.0)
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        return mi.Vector3f(-si.wi.x, -si.wi.y, si.wi.z), si.wi.z > 0
+
+    def sample_alone(self, ctx, si, sample1, sample2, active):
+        wo, valid = self.sample(ctx, si, sample1, sample2, active)
+        ok = active & valid
+        if none(ok):
+            return wo, ok, mi.Spectrum(0.0), mi.Float(0.0)
+        return wo, ok, dr.select(ok, self.delta_value(si, ok), 0.0), dr.select(ok, 1.0, 0.0)
+
+    def weight(self, ctx, si, active):
+        return dr.mean(self.delta_value(si, active))
 
 
 class CosineLobe(Lobe):
@@ -153,6 +199,39 @@ class CosineLobe(Lobe):
 
     def sample(self, ctx, si, sample1, sample2, active):
         return mi.warp.square_to_cosine_hemisphere(sample2), True
+
+
+class TabulatedLobe(Lobe):
+    """
+    A one-sided glossy lobe sampled from a tabulated density (``self.sampler``, a
+    :class:`mi_brdfs.measured.warp.Sampler`), which returns its density with each draw: sampled
+    alone, the lobe evaluates it once. Subclasses give :meth:`value` and set ``sampler``.
+    """
+
+    kind, flags = "GlossyReflection", flag("GlossyReflection", "FrontSide")
+
+    def value(self, si, wo, active):
+        """f·cosθo where both directions are above the surface (not masked)."""
+        raise NotImplementedError
+
+    def eval_pdf(self, ctx, si, wo, active):
+        active = active & (si.wi.z > 0) & (wo.z > 0)
+        if none(active):
+            return mi.Spectrum(0.0), mi.Float(0.0)
+        value, pdf = self.value(si, wo, active), self.sampler.pdf(si.wi, wo, active)
+        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
+
+    def sample(self, ctx, si, sample1, sample2, active):
+        wo, _, valid = self.sampler.sample(si.wi, sample2, active)
+        return wo, valid
+
+    def sample_alone(self, ctx, si, sample1, sample2, active):
+        wo, pdf, valid = self.sampler.sample(si.wi, sample2, active)
+        ok = active & valid & (si.wi.z > 0) & (pdf > 0)
+        if none(ok):
+            return wo, ok, mi.Spectrum(0.0), mi.Float(0.0)
+        value = self.value(si, wo, ok) / dr.select(ok, pdf, 1.0)
+        return wo, ok, dr.select(ok, value, 0.0), dr.select(ok, pdf, 0.0)
 
 
 class Diffuse(CosineLobe):
@@ -203,7 +282,8 @@ class Mixture:
 
     def eval_pdf(self, ctx, si, wo, active=True, probabilities=None):
         """(f·|cosθo|, pdf of :meth:`sample`) at ``wo``: the enabled lobes' sum, and the
-        mixture of their densities."""
+        mixture of their densities (a delta lobe's are 0 there: it only takes its
+        probability from the others)."""
         lobes = self.enabled(ctx)
         if not lobes:
             return mi.Spectrum(0.0), mi.Float(0.0)
@@ -229,20 +309,24 @@ class Mixture:
         if none(active):
             return bs, mi.Spectrum(0.0)
         if len(lobes) == 1:  # alone: the lobe's own weight, in closed form where it has one
-            bs.wo, valid = lobes[0].sample(ctx, si, sample1, sample2, active)
+            bs.wo, valid, value, bs.pdf = lobes[0].sample_alone(ctx, si, sample1, sample2,
+                                                                active)
             bs.sampled_type, bs.sampled_component, bs.eta = lobes[0].record(si, bs.wo)
-            active = active & valid
-            if none(active):
-                return bs, mi.Spectrum(0.0)
-            value, bs.pdf = lobes[0].sample_weight(ctx, si, bs.wo, active)
-            return bs, dr.select(active & (bs.pdf > 0), depolarize(value), 0.0)
+            return bs, dr.select(active & valid & (bs.pdf > 0), depolarize(value), 0.0)
         probs = self.probabilities(ctx, si, lobes, active)
         k, u = mixture.choose(probs, sample1)
         bs.wo, valid, bs.sampled_type, bs.sampled_component, bs.eta = _draw(
             lobes, k, lambda lobe: lobe.sample(ctx, si, u, sample2, active), si)
         active = active & valid
         value, bs.pdf = self.eval_pdf(ctx, si, bs.wo, active, probs)
-        return bs, weight(value, bs.pdf, active)
+        result = weight(value, bs.pdf, active)
+        for j, lobe in enumerate(lobes):  # a delta picked: its probability and weight
+            if lobe.delta and (not isinstance(k, int) or k == j):
+                picked = (k == j) & active & (probs[j] > 0)
+                bs.pdf = dr.select(picked, probs[j], bs.pdf)
+                result = dr.select(picked, depolarize(lobe.delta_value(si, active)) /
+                                   dr.maximum(probs[j], 1e-30), result)
+        return bs, result
 
     def diffuse_reflectance(self, si, active=True):
         """The sum of the diffuse terms' albedos (0 without one)."""

@@ -17,11 +17,6 @@ from . import lobes, properties
 
 PLUGIN = "merl"
 
-#: The share of samples drawn from the cosine-weighted hemisphere: a defensive mixture
-#: (Hesterberg 1995, "Weighted Average Importance Sampling and Defensive Mixture
-#: Distributions") that keeps the density positive wherever f is, whatever the table missed.
-COSINE_SHARE = 0.1
-
 #: The tables of each file in this variant (this module runs once per variant), by the file's
 #: path, modification time and size: every instance that names a file shares them, and a file
 #: rewritten since is read again.
@@ -49,7 +44,7 @@ def _columns(rgb: np.ndarray) -> np.ndarray:
 
 class Table:
     """One measured file in this variant: the bins' values (:func:`_columns`) and the
-    sampler's ``MarginalContinuous2D1``."""
+    sampler of their density (:class:`mi_brdfs.measured.warp.Sampler`)."""
 
     def __init__(self, measured: data.Measured):
         columns = _columns(measured.rgb)
@@ -57,7 +52,7 @@ class Table:
         # scalar variants call the methods with Python numbers: the rows stay in NumPy
         scalar = not dr.is_jit_v(mi.Float)
         self.buffer = columns if scalar else mi.Float(columns.ravel())
-        self.sampler = mi.MarginalContinuous2D1(measured.density, [measured.thetas])
+        self.sampler = warp.Sampler(measured.density, measured.thetas)
         self.unmeasured = measured.unmeasured
 
     def spectrum(self, index, si):
@@ -84,47 +79,17 @@ class Table:
             total = term if total is None else total + term
         return total
 
-    def pdf(self, wi, wo, active):
-        """The density of :meth:`sample` at ωo, the defensive mixture's."""
-        uv, jac = warp.to_square(wi, wo)
-        table = self.sampler.eval(uv, [warp.theta(wi)], active)
-        ok = active & (jac > 0)
-        table = dr.select(ok, table / dr.select(ok, jac, 1.0), 0.0)
-        cosine = mi.warp.square_to_cosine_hemisphere_pdf(wo)
-        return (1.0 - COSINE_SHARE) * table + COSINE_SHARE * cosine
 
-    def sample(self, wi, sample1, sample2, active):
-        """(ωo, valid): from the cosine-weighted hemisphere where ``sample1`` <
-        :data:`COSINE_SHARE`, else from the table."""
-        pick = sample1 < COSINE_SHARE
-        if type(pick) is bool and pick:  # scalar variants: only the branch taken
-            return mi.warp.square_to_cosine_hemisphere(sample2), True
-        uv, _ = self.sampler.sample(sample2, [warp.theta(wi)], active)
-        wo, _, valid = warp.to_direction(wi, uv)
-        if type(pick) is bool:
-            return wo, valid
-        return dr.select(pick, mi.warp.square_to_cosine_hemisphere(sample2), wo), pick | valid
-
-
-class Measured(lobes.Lobe):
+class Measured(lobes.TabulatedLobe):
     """The measured BRDF times ``scale``, one glossy component, one-sided."""
-
-    kind, flags = "GlossyReflection", lobes.flag("GlossyReflection", "FrontSide")
 
     def __init__(self, table: Table, scale, nearest: bool):
         self.table, self.scale, self.nearest = table, scale, nearest
+        self.sampler = table.sampler
 
-    def eval_pdf(self, ctx, si, wo, active):
-        active = active & (si.wi.z > 0) & (wo.z > 0)
-        if lobes.none(active):
-            return mi.Spectrum(0.0), mi.Float(0.0)
+    def value(self, si, wo, active):
         scale = properties.clip_at(self.scale, si, active, 0.0, math.inf)
-        value = self.table.f(si, wo, self.nearest) * scale * wo.z
-        pdf = self.table.pdf(si.wi, wo, active)
-        return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
-
-    def sample(self, ctx, si, sample1, sample2, active):
-        return self.table.sample(si.wi, sample1, sample2, active)
+        return self.table.f(si, wo, self.nearest) * scale * wo.z
 
     def weight(self, ctx, si, active):
         return mi.Float(1.0)  # one lobe: the mixture never weighs it
@@ -169,11 +134,11 @@ class Merl(mi.BSDF):
     component, as Mitsuba's ``measured``.
 
     **Sampling.** ωo is drawn through the half vector from a density tabulated per incident
-    angle (24 angles; a 128 × 64 grid over (√θh, φh − φi)) that is f·cosθo times the
+    angle (16 angles; a 64 × 32 grid over (√θh, φh − φi)) that is f·cosθo times the
     Jacobian of the map, interpolated and sampled by Mitsuba's ``MarginalContinuous2D1``
-    (the sampler of its ``measured`` plugin, Dupuy & Jakob 2018), with an exact pdf; one
-    sample in ten comes from the cosine-weighted hemisphere instead (a defensive mixture,
-    Hesterberg 1995), so the density is positive wherever f is.
+    (the sampler of its ``measured`` plugin, Dupuy & Jakob 2018), with an exact pdf; a tenth
+    of that density is the cosine-weighted hemisphere's carried into the grid (a defensive
+    mixture, Hesterberg 1995), so the density is positive wherever f is.
 
     **Variants.** The data are RGB. RGB variants use them as they are, monochrome ones their
     luminance, spectral ones Mitsuba's smooth spectra of RGB (Jakob & Hanika 2019) of each bin,

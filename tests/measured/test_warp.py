@@ -52,3 +52,28 @@ def test02_the_drjit_map_is_the_float64_one(variant_llvm_ad_rgb):
     back, back_jac = warp.to_square(as_vec(wi), as_vec(wo))
     np.testing.assert_allclose(np.array(back).T[ok], np.stack([u, v], 1)[ok], atol=2e-5)
     np.testing.assert_allclose(np.array(back_jac)[ok], jac[ok], rtol=1e-4)
+
+
+def _density_at(f_mean, theta, u, v):
+    """The sampler's density p(u, v | θi) of :func:`warp.density` built from ``f_mean``."""
+    data, thetas = warp.density(f_mean)
+    sampler = mi.MarginalContinuous2D1(data, [thetas])
+    uv = mi.Point2f(mi.Float(u.astype(np.float32)), mi.Float(v.astype(np.float32)))
+    return np.array(sampler.eval(uv, [mi.Float(theta.astype(np.float32))]))
+
+
+def test03_the_density_is_positive_wherever_f_is(variant_llvm_ad_rgb, monkeypatch):
+    """f non-zero at one node of each θi's grid alone (a lobe the grid all but misses): the defensive
+    share keeps the density positive at every valid (u, v), where f·cosθo/pdf stays bounded;
+    with no defensive share it is 0 almost everywhere (rejected)."""
+    def spike(wi, wo):  # 1 at the node (u, v) = (32/63, 16/31) of each θi, else 0
+        target = warp.forward(np.arctan2(wi[:, 0], wi[:, 2]), 32 / 63, 16 / 31)[1]
+        return np.where(np.all(np.isclose(wo, target, rtol=0, atol=1e-9), axis=1), 1.0, 0.0)
+
+    theta, u, v = _points(4000, seed=3)
+    valid = warp.forward(theta, u, v)[2] > 0
+    p = _density_at(spike, theta[valid], u[valid], v[valid])
+    assert p.min() > 0
+    monkeypatch.setattr(warp, "DEFENSIVE_SHARE", 0.0)
+    p = _density_at(spike, theta[valid], u[valid], v[valid])
+    assert (p == 0).mean() > 0.9
