@@ -36,6 +36,9 @@ models apart:
 * ``merl``: measured data in MERL's format (Matusik et al. 2003, "A Data-Driven Reflectance
   Model"), here Mitsuba's own BSDFs tabulated by the virtual gonioreflectometer
   (``mi-brdfs measure``: a column's ``source``), read back by the plugin.
+* ``he``: He, Torrance, Sillion & Greenberg's (1991, "A Comprehensive Physical Model for Light
+  Reflection") wave-optical model on aluminium, from a nearly smooth surface (its specular
+  delta dominates) to a rough one (the directional diffuse lobe), as σ0 grows.
 
 The layout is fixed in pixels (:func:`layout`), so that the PNG's size follows from the rows,
 the columns and the tile resolution alone.
@@ -156,6 +159,8 @@ ROWS: tuple[Row, ...] = (
           {"source": "roughconductor material=Au distribution=ggx alpha=0.1"}),
          ("roughplastic", {"source": "roughplastic"}),
          ("principled, roughness 0.4", {"source": "principled roughness=0.4"}))),
+    Row("he", "westin reading, τ = 3 µm, Al", {"type": "he", "tau": 3.0, "material": "Al"},
+        tuple((f"σ0 = {s:g} µm", {"sigma0": s}) for s in (0.02, 0.08, 0.3))),
 )
 
 # The layout, in pixels (the PNG is written at DPI dots per inch, so 1 pt = DPI/72 px).

@@ -49,6 +49,7 @@ PLUGINS = {
     "ashikhmin": ("mi_brdfs.plugins.ashikhmin", "Ashikhmin"),
     "lafortune": ("mi_brdfs.plugins.lafortune", "Lafortune"),
     "merl": ("mi_brdfs.plugins.merl", "Merl"),
+    "he": ("mi_brdfs.plugins.he", "He"),
 }
 
 # variant -> {plugin id -> class}

@@ -49,6 +49,6 @@ def _load(path: str, mtime_ns: int, size: int) -> Measured:
     above = ((wi[:, 2] > 0) & (wo[:, 2] > 0)).reshape(merl.RES)
     unmeasured = int((np.isnan(values[0]) & above).sum())
     values = np.nan_to_num(values, nan=0.0)
-    density, thetas = warp.density(lambda wi, wo: merl.interpolate(values, wi, wo).mean(axis=-1))
+    density, thetas, _ = warp.density(lambda wi, wo: merl.interpolate(values, wi, wo).mean(axis=-1))
     rgb = np.moveaxis(values, 0, -1).reshape(-1, 3).astype(np.float32)
     return Measured(rgb, unmeasured, density, thetas, (path, mtime_ns, size))

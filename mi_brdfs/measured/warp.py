@@ -74,14 +74,16 @@ def _mean_one(value):
     return np.where(mean > 0, value / np.where(mean > 0, mean, 1.0), np.nan)
 
 
-def density(f_mean) -> tuple[np.ndarray, list[float]]:
+def density(f_mean) -> tuple[np.ndarray, list[float], np.ndarray]:
     """
-    (data, θi nodes) for ``MarginalContinuous2D1``: at θi node t and (u, v) = (a/(N_U − 1),
+    (data, θi nodes, albedo) for ``MarginalContinuous2D1``: at θi node t and (u, v) = (a/(N_U − 1),
     b/(N_V − 1)), data[t, b, a] is f·cosθo·J and, its :data:`DEFENSIVE_SHARE`, cosθo·J
     (:data:`OUTSIDE` times |cosθo·J| at invalid nodes), each normalised to mean 1 over the
     nodes; float32. ``f_mean(wi, wo)`` is f (the mean over
     channels) at (n, 3) direction pairs. The last node sits just under the horizon's θi = π/2,
     where f·cosθo would be 0 everywhere; a node where f is 0 everywhere is the cosine's alone.
+    albedo[t] = ∫ f cosθo dωo at node t, the mean of f·cosθo·J over the nodes (the square's
+    area is 1): the weight of a lobe sampled so, against the other lobes of a mixture.
     """
     thetas = np.linspace(0.0, np.pi / 2, N_THETA)
     t, v, u = np.meshgrid(np.minimum(thetas, np.pi / 2 - 1e-3), np.linspace(0, 1, N_V),
@@ -93,10 +95,11 @@ def density(f_mean) -> tuple[np.ndarray, list[float]]:
     _, wo_any, jac_any = _forward(t, u, v)
     cosine = np.abs(wo_any[..., 2] * jac_any)
     cosine = _mean_one(np.where(valid, cosine, OUTSIDE * cosine))
+    albedo = value.mean(axis=(1, 2))
     value = _mean_one(value)
     mixed = (1.0 - DEFENSIVE_SHARE) * value + DEFENSIVE_SHARE * cosine
     return np.where(np.isnan(value), cosine, mixed).astype(np.float32), \
-        [float(x) for x in thetas]
+        [float(x) for x in thetas], albedo
 
 
 def theta(w):
@@ -143,8 +146,24 @@ class Sampler:
     ``MarginalContinuous2D1``): :meth:`pdf` at a direction, :meth:`sample` one with its
     density."""
 
-    def __init__(self, data: np.ndarray, thetas: list):
+    def __init__(self, data: np.ndarray, thetas: list, albedo: np.ndarray | None = None):
         self.table = mi.MarginalContinuous2D1(data, [thetas])
+        self.thetas = thetas
+        #: The largest albedo of the density's f at its nodes (0 without ``albedo``).
+        self.albedo_max = 0.0 if albedo is None else float(np.max(albedo))
+        if albedo is not None:
+            self.albedo_nodes = albedo if not dr.is_jit_v(mi.Float) else mi.Float(albedo)
+
+    def albedo(self, wi):
+        """The albedo of :func:`density` at θi of ωi, linear between the nodes."""
+        t = theta(wi)
+        if not dr.is_jit_v(mi.Float):  # scalar variants: one lane, NumPy
+            return float(np.interp(t, self.thetas, self.albedo_nodes))
+        x = t * ((len(self.thetas) - 1) / (0.5 * dr.pi))
+        i = dr.clip(mi.UInt32(dr.floor(x)), 0, len(self.thetas) - 2)
+        w = dr.clip(x - mi.Float(i), 0.0, 1.0)
+        a0 = dr.gather(mi.Float, self.albedo_nodes, i)
+        return dr.lerp(a0, dr.gather(mi.Float, self.albedo_nodes, i + 1), w)
 
     def pdf(self, wi, wo, active):
         """The density of :meth:`sample` at ωo (solid angle)."""

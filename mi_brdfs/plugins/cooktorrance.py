@@ -28,17 +28,6 @@ DEFAULT_MATERIAL = "Cu"
 
 
 
-def _constant_channels(props, name) -> list[float] | None:
-    """The per-channel values of a float or ``<rgb>`` property, else None (a texture)."""
-    kind = props.type(name)
-    T = mi.Properties.Type
-    if kind in (T.Float, T.Integer):
-        return [float(props[name])]
-    if kind == T.Color:
-        return [float(c) for c in props[name]]
-    return None
-
-
 _REFRACTION_ONLY = "is a parameter of the refraction lobe: give transmission = true as well"
 _DIELECTRIC_ONLY = "with transmission = true: only a dielectric transmits"
 
@@ -136,23 +125,9 @@ def _read_ior(props, needed: bool):
     ``(eta, k, material)`` from ``material`` or ``eta``/``k`` (see the class docstring); all
     None when the Fresnel term is off (``needed`` false) and none of them is given.
     """
-    if "material" in props:
-        name = props["material"]
-        return (*material_ior(name, PLUGIN), name)
-    if "eta" not in props:
-        if not needed:
-            return None, None, None
-        return (*material_ior(DEFAULT_MATERIAL, PLUGIN), DEFAULT_MATERIAL)
-    eta = properties.texture(props, PLUGIN, "eta", 1.5, lo=0.0, hi=IOR_MAX)
-    k = properties.texture(props, PLUGIN, "k", 0.0, lo=0.0, hi=IOR_MAX)
-    eta_c = _constant_channels(props, "eta")
-    k_c = _constant_channels(props, "k") if "k" in props else [0.0]
-    if eta_c is not None and k_c is not None:
-        n = max(len(eta_c), len(k_c))
-        if any(eta_c[i % len(eta_c)] == 0 and k_c[i % len(k_c)] == 0 for i in range(n)):
-            raise ParameterError(PLUGIN, "eta", props["eta"],
-                                 "must be > 0 where k = 0 (a dielectric; η = 0 needs k > 0)")
-    return eta, k, None
+    if not needed and "material" not in props and "eta" not in props:
+        return None, None, None
+    return properties.ior(props, PLUGIN, DEFAULT_MATERIAL)
 
 
 GLOSSY_FLAGS = lobes.flag("GlossyReflection", "FrontSide")

@@ -20,6 +20,8 @@ import numpy as np
 
 from .. import presets
 from ..errors import Description, ParameterError
+from ..materials import material_ior
+from ..scattering.fresnel import IOR_MAX
 from ..scattering.microfacet import ALPHA_MIN
 
 _T = None
@@ -383,3 +385,38 @@ def warn(plugin: str, message: str) -> None:
 def indent(obj, amount: int = 2) -> str:
     """``str(obj)`` with every line after the first indented, as Mitsuba's ``string::indent``."""
     return str(obj).replace("\n", "\n" + " " * amount)
+
+
+def _constant_channels(props, name) -> list[float] | None:
+    """The per-channel values of a float or ``<rgb>`` property, else None (a texture)."""
+    kind = props.type(name)
+    T = mi.Properties.Type
+    if kind in (T.Float, T.Integer):
+        return [float(props[name])]
+    if kind == T.Color:
+        return [float(c) for c in props[name]]
+    return None
+
+
+def ior(props, plugin: str, default_material: str | None):
+    """
+    ``(eta, k, material)``: the complex index η + ik of a named conductor (``material``, one of
+    Mitsuba's measured spectra, :func:`mi_brdfs.materials.material_ior`), or the textures
+    ``eta`` and ``k`` (each ≤ :data:`mi_brdfs.scattering.fresnel.IOR_MAX`; η = k = 0 refused);
+    without either, ``default_material``, or η = 1.5, k = 0 where that is None.
+    """
+    if "material" in props:
+        name = props["material"]
+        return (*material_ior(name, plugin), name)
+    if "eta" not in props and default_material is not None:
+        return (*material_ior(default_material, plugin), default_material)
+    eta = texture(props, plugin, "eta", 1.5, lo=0.0, hi=IOR_MAX)
+    k = texture(props, plugin, "k", 0.0, lo=0.0, hi=IOR_MAX)
+    eta_c = _constant_channels(props, "eta") if "eta" in props else [1.5]
+    k_c = _constant_channels(props, "k") if "k" in props else [0.0]
+    if eta_c is not None and k_c is not None:
+        n = max(len(eta_c), len(k_c))
+        if any(eta_c[i % len(eta_c)] == 0 and k_c[i % len(k_c)] == 0 for i in range(n)):
+            raise ParameterError(plugin, "eta", props["eta"],
+                                 "must be > 0 where k = 0 (a dielectric; η = 0 needs k > 0)")
+    return eta, k, None

@@ -103,7 +103,33 @@ def for_spec(spec):
         return _rough_dielectric(spec)
     if kind in ("cooktorrance", "roughconductor"):
         return _cooktorrance(spec)
+    if kind == "he":
+        return _he(spec)
     return None
+
+
+def _he(spec):
+    """
+    The reference of an ``he`` dict at the wavelengths of the current variant's plugin (RGB's
+    three, monochrome's one); None in spectral variants (their wavelengths are sampled), for
+    named materials, textures and a ``specular_reflectance`` other than 1.
+    """
+    import mitsuba as mi
+
+    from ..scattering.he import DEFAULT_SIGMA0, DEFAULT_TAU, MONO_WAVELENGTH, RGB_WAVELENGTHS
+    from .he import HTSG
+    if mi.variant() is None or mi.is_spectral or "material" in spec or \
+            spec.get("specular_reflectance", 1.0) != 1.0:
+        return None
+    sigma0, tau = spec.get("sigma0", DEFAULT_SIGMA0), spec.get("tau", DEFAULT_TAU)
+    eta, k = color(spec.get("eta"), 1.5), color(spec.get("k"), 0.0)
+    a = color(spec.get("diffuse_reflectance"), 0.0)
+    if any(x is None for x in (eta, k, a)) or \
+            not all(isinstance(x, (int, float)) for x in (sigma0, tau)):
+        return None
+    wavelength = [MONO_WAVELENGTH] if mi.is_monochromatic else list(RGB_WAVELENGTHS)
+    return HTSG(sigma0, tau, wavelength, eta, k, a, spec.get("variant", "westin"),
+                spec.get("terms", "variant"))
 
 
 def _rough_dielectric(spec):

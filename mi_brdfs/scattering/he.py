@@ -33,6 +33,15 @@ import drjit as dr
 
 from .fresnel import exact as fresnel_exact
 
+#: The wavelengths (µm) RGB variants evaluate the wave-optical terms at, red, green, blue: those
+#: of bsdfbenchmark/bbm's RGB configuration (backbone/*/include/backbone.h,
+#: https://github.com/bsdfbenchmark/bbm), with which Ngan et al.'s He fits it ships are used.
+RGB_WAVELENGTHS = (0.645, 0.526, 0.444)
+#: The wavelength (µm) of monochrome variants: the middle of the visible range.
+MONO_WAVELENGTH = 0.55
+#: bbm's default surface (σ0, τ) in µm, the ``he`` plugin's.
+DEFAULT_SIGMA0, DEFAULT_TAU = 0.18, 3.0
+
 #: Newton steps of :func:`solve_x` (float32 converges in at most 5 from its starts).
 NEWTON_STEPS = 8
 
@@ -151,7 +160,8 @@ def directional_diffuse(wi, wo, sigma0, tau, wavelength, eta, k, reading: Readin
     d = dr.square(math.pi * tau / (2.0 * wavelength)) * total
     f = fresnel_exact(0.5 * dr.sqrt(vv), eta, k)
     denom = dr.select(above, math.pi * ci * co, 1.0)
-    return dr.select(above, f * (s * geometry / denom) * d, 0.0)
+    # 0 where the series is (σ0 = 0): at grazing angles G/(cosθi cosθo) overflows float32
+    return dr.select(above & (total > 0), f * (s * geometry / denom) * d, 0.0)
 
 
 def specular_weight(cos_i, sigma0, tau, wavelength, eta, k, reading: Reading):
@@ -164,6 +174,7 @@ def specular_weight(cos_i, sigma0, tau, wavelength, eta, k, reading: Reading):
     return dr.select(cos_i > 0, fresnel_exact(ci, eta, k) * dr.exp(-g) * s, 0.0)
 
 
-__all__ = ["NEWTON_STEPS", "READINGS", "Reading", "directional_diffuse", "effective_roughness",
+__all__ = ["DEFAULT_SIGMA0", "DEFAULT_TAU", "MONO_WAVELENGTH", "NEWTON_STEPS", "READINGS",
+           "RGB_WAVELENGTHS", "Reading", "directional_diffuse", "effective_roughness",
            "phase_variance", "rough_asymptote", "series", "shadowing", "solve_x",
            "specular_weight"]

@@ -47,12 +47,21 @@ PLUGINS = [spec_of(name) for name in registry.PLUGINS] + [
 ]
 
 
+#: The pdfs detached by design, per plugin: he's sampling density is tabulated from its
+#: surface's parameters when they are set (a table has no derivative), and its sampling
+#: probabilities are detached from them alike.
+DETACHED_PDF = {"he": {"sigma0", "tau", "eta.value", "k.value"}}
+
+
 @pytest.mark.parametrize("spec", PLUGINS, ids=lambda s: "-".join(str(v) for v in s.values()))
 def test02_every_plugin_passes(variant_llvm_ad_rgb, spec):
     """Every differentiable parameter of every plugin: AD = finite differences in eval, pdf
-    and the sample weights (the testing assertion)."""
+    and the sample weights (the testing assertion); a pdf detached by design is reported so."""
     result = assert_gradients(spec, n=256)
-    assert all(g.status in ("ok", "constant") for g in result.details["rows"]), result.message
+    allowed = DETACHED_PDF.get(spec["type"], set())
+    for g in result.details["rows"]:
+        detached = g.status == "detached" and g.quantity == "pdf" and g.parameter in allowed
+        assert g.status in ("ok", "constant") or detached, result.message
 
 
 def test03_the_compensated_glass_carries_eta_into_its_tables(variant_llvm_ad_rgb,

@@ -56,7 +56,7 @@ def test02_the_drjit_map_is_the_float64_one(variant_llvm_ad_rgb):
 
 def _density_at(f_mean, theta, u, v):
     """The sampler's density p(u, v | θi) of :func:`warp.density` built from ``f_mean``."""
-    data, thetas = warp.density(f_mean)
+    data, thetas, _ = warp.density(f_mean)
     sampler = mi.MarginalContinuous2D1(data, [thetas])
     uv = mi.Point2f(mi.Float(u.astype(np.float32)), mi.Float(v.astype(np.float32)))
     return np.array(sampler.eval(uv, [mi.Float(theta.astype(np.float32))]))

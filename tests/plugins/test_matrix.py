@@ -30,6 +30,7 @@ PLUGINS = {
     "cooktorrance": ("diffuse_reflectance", {"multiscatter": True, "shadowing": "smith",
                                              "specular_reflectance": 0.5}),
     "merl": ("scale", {"filename": str(merl_file())}),
+    "he": ("diffuse_reflectance", {"specular_reflectance": 0.8, "sigma0": 0.05}),
 }
 
 
