@@ -10,6 +10,6 @@ are reported met or missed in the report's summary.
 
 def sections() -> list:
     """The report's sections, in order."""
-    from . import backends, error_time, measured, models, precision, strategies, user_scene
+    from . import backends, error_time, he, measured, models, precision, strategies, user_scene
     return [backends.section, error_time.section, strategies.section, measured.section,
-            models.section, precision.section, user_scene.section]
+            he.section, models.section, precision.section, user_scene.section]

@@ -77,14 +77,15 @@ def cosine_sampled(bsdf) -> mi.BSDF:
     return mi.load_dict({"type": COSINE, "bsdf": bsdf})
 
 
-def _time_ratio(ctx: Context, scene: str, merl) -> tuple:
-    """(time to 1 % with merl's sampler, with the cosine's, their ratio) in ``scene``."""
+def time_ratio(ctx: Context, scene: str, bsdf) -> tuple:
+    """(time to 1 % with the BSDF's own sampler, with the cosine's, their ratio) in
+    ``scene``."""
     spps = [2 ** k for k in range(ctx.n(6, 2))]
     reference_spp = 16 * spps[-1]
-    rows, _ = error_time.measure(scene, {"merl": merl, "cosine": cosine_sampled(merl)},
+    rows, _ = error_time.measure(scene, {"own": bsdf, "cosine": cosine_sampled(bsdf)},
                                  spps, ctx.n(96, 16), ctx.n(7, 2), reference_spp)
-    times = {k: error_time.time_to(rows, k, reference_spp) for k in ("merl", "cosine")}
-    return times["merl"], times["cosine"], times["cosine"] / times["merl"]
+    times = {k: error_time.time_to(rows, k, reference_spp) for k in ("own", "cosine")}
+    return times["own"], times["cosine"], times["cosine"] / times["own"]
 
 
 def _efficiency(ctx: Context, s: Section, label: str, merl, target) -> tuple:
@@ -97,7 +98,7 @@ def _efficiency(ctx: Context, s: Section, label: str, merl, target) -> tuple:
         f"{eff['sample()'] / eff['cosine']:.3g}×"
     cells = []
     for scene, key in (("furnace", f" (furnace): {label}"), ("showcase", f": {label}")):
-        t_merl, t_cos, ratio = _time_ratio(ctx, scene, merl)
+        t_merl, t_cos, ratio = time_ratio(ctx, scene, merl)
         shown = f"{ratio:.3g}×" if math.isfinite(ratio) else "— (too short to time)"
         s.values[f"merl sampling vs cosine, time to 1 %{key}"] = shown
         cells += [error_time.seconds_text(t_merl), error_time.seconds_text(t_cos),
