@@ -26,7 +26,11 @@ h = (ωi + ωo)/‖ωi + ωo‖ and A the fit's RGB ``albedo``:
 * NganAshikhminShirley: A·(n+1)/(8π)·cosⁿθh·F(ωi·h)/((ωi·h) max(cosθi, cosθo)), F Schlick's
   with F0 = ``fresnelReflectance`` (Ashikhmin & Shirley 2000, the specular term alone);
 * NganLafortune: A·(n+2)/(2π)·max(0, Cxy(ix ox + iy oy) + Cz iz oz)ⁿ / max(Cxy², Cz²)^(n/2);
-* NganHe: He et al. 1991 as Westin et al. write it; no plugin here yet.
+* NganHe: A times He et al.'s (1991) directional diffuse term as Westin et al.'s code has it
+  (the errata's shadowing, v_xy in wave numbers, at bbm's RGB wavelengths 0.645, 0.526 and
+  0.444 µm), of rms roughness ``roughness`` and autocorrelation length ``autocorrelation``
+  (µm) and a real index ``eta`` (Cook & Torrance's Fresnel term, the exact one for k = 0), the
+  series blended linearly into Beckmann's asymptote over 18 ≤ g ≤ 19; no specular delta.
 """
 
 from __future__ import annotations
@@ -53,13 +57,13 @@ TERMS = {"ashikhminshirley": "NganAshikhminShirley", "blinnphong": "NganBlinnPho
          "ward": "NganWard", "wardduer": "NganWardDuer"}
 #: The fit a plugin takes for ``ngan:<material>``.
 DEFAULT_MODEL = {"ward": "ward", "phong": "blinnphong", "cooktorrance": "cooktorrance",
-                 "ashikhmin": "ashikhminshirley", "lafortune": "lafortune"}
-#: The plugin of each model; a model without one says why (``he``) in :data:`NO_PLUGIN`.
+                 "ashikhmin": "ashikhminshirley", "lafortune": "lafortune", "he": "he"}
+#: The plugin of each model; a model without one says why in :data:`NO_PLUGIN`.
 PLUGIN_OF = {"ward": "ward", "wardduer": "ward", "blinnphong": "phong",
              "cooktorrance": "cooktorrance", "ashikhminshirley": "ashikhmin",
-             "lafortune": "lafortune"}
-#: The models without a plugin, and why.
-NO_PLUGIN = {"he": "no plugin he yet (He, Torrance, Sillion & Greenberg 1991)"}
+             "lafortune": "lafortune", "he": "he"}
+#: The models without a plugin, and why (none now).
+NO_PLUGIN: dict = {}
 #: The models whose fits convert to no parameters of their plugin exactly: what differs.
 NOT_EXACT = {
     "ashikhminshirley": (
@@ -72,7 +76,9 @@ NOT_EXACT = {
 }
 
 #: What the overview (:func:`table`) adds to an exact conversion.
-NOTES = {"blinnphong": "; Blinn-Phong's cosⁿθh, where bbm evaluates cosⁿ of the mirror angle"}
+NOTES = {"blinnphong": "; Blinn-Phong's cosⁿθh, where bbm evaluates cosⁿ of the mirror angle",
+         "he": "; westin's switch to the asymptote at g = 18.5, where bbm blends over "
+               "18 ≤ g ≤ 19; and the plugin's specular delta, which bbm's model has not"}
 
 #: Properties the scene gives that a preset's entries give way to: (a preset entry, the
 #: scene's names that replace it). Explicit parameters win, alternatives included.
@@ -287,13 +293,30 @@ def _lafortune(fit: Fit) -> dict:
             "diffuse_reflectance": fit.diffuse}
 
 
+def _he(fit: Fit) -> dict:
+    """
+    NganHe A·ρ_dd is ``he``'s directional diffuse term with ``specular_reflectance`` A, in the
+    westin reading: σ0 = ``roughness``, τ = ``autocorrelation`` (both µm, as ``he`` takes them),
+    η = ``eta``, k = 0. Two differences, documented and measured (tests/test_presets.py): bbm
+    blends the series into the asymptote over 18 ≤ g ≤ 19, where westin (Westin et al.'s code)
+    switches at g = 18.5; and ``he`` adds the coherent delta of weight ρ_s·A that He et al.'s
+    model has and bbm's (fitted to measurements without it) has not.
+    """
+    p = fit.params
+    return {"variant": "westin", "sigma0": p["roughness"], "tau": p["autocorrelation"],
+            "eta": p["eta"], "k": 0.0, "specular_reflectance": p["albedo"],
+            "diffuse_reflectance": fit.diffuse}
+
+
 #: model -> the conversion of one of its fits to the plugin's properties.
 CONVERSIONS = {"ward": lambda f: _ward(f, "original"), "wardduer": lambda f: _ward(f, "duer"),
                "blinnphong": _blinnphong, "cooktorrance": _cooktorrance,
-               "lafortune": _lafortune}
+               "lafortune": _lafortune, "he": _he}
 
-#: Properties of a reflectance within [0, 1]: a fit outside it cannot be that plugin's preset.
+#: Properties of a reflectance within [0, 1]: a fit outside it cannot be that plugin's preset
+#: (he's specular_reflectance is a factor ≥ 0, unbounded, as Ngan et al.'s He albedos are).
 _BOUNDED = ("specular_reflectance", "diffuse_reflectance", "specular_reflectance_0")
+_UNBOUNDED = {"he": ("specular_reflectance",)}
 
 
 # -------------------------------------------------------------------------------------------------
@@ -342,8 +365,17 @@ def parameters(plugin: str, preset: str) -> dict:
     (ParameterError as :func:`resolve`, and where a converted value leaves the plugin's
     range)."""
     model, material = resolve(plugin, preset)
-    params = CONVERSIONS[model](load(model)[material])
+    fit = load(model)[material]
+    if model == "he" and fit.params["eta"] <= 1.0:
+        albedo = "[" + ", ".join(f"{v:.3g}" for v in fit.params["albedo"]) + "]"
+        raise ParameterError(plugin, "preset", preset, (
+            f"the fit's eta is {fit.params['eta']:g} as its file prints it (3 digits), for "
+            f"which Fresnel's reflectance is 0 and the lobe vanishes; its albedo {albedo} "
+            f"made up for an index the file rounds away, so the fit cannot be reproduced"))
+    params = CONVERSIONS[model](fit)
     for name in _BOUNDED:
+        if name in _UNBOUNDED.get(plugin, ()):
+            continue
         value = params.get(name)
         if value is not None and max(value) > 1.0:
             raise ParameterError(plugin, "preset", preset, _beyond(model, name, value))

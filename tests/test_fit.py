@@ -49,6 +49,10 @@ ROUND_TRIPS = {
         "alpha=0.6 specular_reflectance=0.8",
         "cooktorrance multiscatter=true distribution=ggx shadowing=smith fresnel=none "
         "alpha=0.3 specular_reflectance=1", "alpha,specular_reflectance"),
+    # He et al.: the surface's lengths (µm, fitted in log scale) and the uniform term
+    "he": ("he sigma0=0.1 tau=2 eta=1.4 diffuse_reflectance=0.1",
+           "he sigma0=0.2 tau=4 eta=1.4 diffuse_reflectance=0.3",
+           "sigma0,tau,diffuse_reflectance"),
 }
 
 #: The true values of the round trips, per parameter (a number or [r, g, b]).
@@ -63,13 +67,15 @@ TRUTH = {
     "lafortune": {"cz_0": 0.7, "exponent_0": 20.0, "specular_reflectance_0": 0.4,
                   "diffuse_reflectance": 0.3},
     "cooktorrance-multiscatter": {"alpha": 0.6, "specular_reflectance": 0.8},
+    "he": {"sigma0": 0.1, "tau": 2.0, "diffuse_reflectance": 0.1},
 }
 
 #: Sizes of the round trips that converge in fewer steps: measured (1024 pairs, 300 steps),
 #: every parameter within 3·10⁻⁵ of the truth (1.4-1.6 s each); 250 steps left lafortune's
 #: exponent 5·10⁻⁴ away from a start of n = 10.
 FAST = {"ashikhmin": dict(pairs=1024, steps=300), "lafortune": dict(pairs=1024, steps=300),
-        "cooktorrance-multiscatter": dict(pairs=1024, steps=300)}
+        "cooktorrance-multiscatter": dict(pairs=1024, steps=300),
+        "he": dict(pairs=512, steps=150)}
 
 #: Tolerance of a round trip, relative per parameter. The target is the model itself, so the
 #: optimum is exact; measured with these sizes: every parameter equal to the truth in the 6

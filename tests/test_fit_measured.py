@@ -124,8 +124,8 @@ def test08_models_all_cli(ggx_file, tmp_path):
     assert set(scores) == {"phong", "cooktorrance"} and set(scores["phong"]) == set(METRICS)
     assert all(scores["cooktorrance"][m] < scores["phong"][m] for m in METRICS)
     assert "| cooktorrance | " in (tmp_path / "models.md").read_text()
-    cli_one_line_error(["fit", str(ggx_file), "--models", "phong,he"],
-                       "--models phong,he: he is not a lecture model")
+    cli_one_line_error(["fit", str(ggx_file), "--models", "phong,torrance"],
+                       "--models phong,torrance: torrance is not a lecture model")
     cli_one_line_error(["fit", str(ggx_file), "--models", "all", "--model", "ward"],
                        "not allowed with argument")
 

@@ -26,7 +26,7 @@ KEYS = {"ward": {"albedo", "roughness"}, "wardduer": {"albedo", "roughness"},
 #: (plugin, preset prefix) of each model that converts exactly.
 EXACT = {"ward": ("ward", "ngan"), "wardduer": ("ward", "ngan-wardduer"),
          "blinnphong": ("phong", "ngan"), "cooktorrance": ("cooktorrance", "ngan"),
-         "lafortune": ("lafortune", "ngan")}
+         "lafortune": ("lafortune", "ngan"), "he": ("he", "ngan")}
 #: Coloured fits, narrow and wide lobes, metals and plastics.
 MATERIALS = ("gold-metallic-paint", "blue-acrylic", "nickel", "white-diffuse-bball")
 
@@ -45,11 +45,25 @@ def pairs(rng, n=600):
     return wi[keep], wo[keep]
 
 
+def he_blend(fit, wi, wo):
+    """Where bbm's NganHe blends its series into the asymptote (18 ≤ g ≤ 19 in some channel),
+    which westin's reading switches at 18.5: the pairs where the two differ."""
+    from mi_brdfs.reference import he, ngan
+    p = fit.params
+    sigma = he.effective_roughness(wi[:, 2], wo[:, 2], p["roughness"], p["autocorrelation"])
+    g = he.phase_variance(sigma, wi[:, 2], wo[:, 2], ngan.HE_WAVELENGTHS)
+    return np.any((g >= ngan.HE_BLEND[0]) & (g <= ngan.HE_BLEND[1]), axis=1)
+
+
 def check(bsdf, model, material, lobe="halfway", params=None):
-    """The plugin's f·cosθo against bbm's model of the fit (``params`` replace the fit's)."""
+    """The plugin's f·cosθo against bbm's model of the fit (``params`` replace the fit's);
+    for he, outside bbm's blend (:func:`he_blend`)."""
     fit = presets.fit(model, material)
     reference = NganFit(model, fit.diffuse, {**fit.params, **(params or {})}, lobe)
     wi, wo = pairs(np.random.default_rng(7))
+    if model == "he":
+        keep = ~he_blend(fit, wi, wo)
+        wi, wo = wi[keep], wo[keep]
     value = eval_pdf(bsdf, wi, wo)[0]
     assert np.all(np.isfinite(value)) and np.any(value > 0)
     return assert_matches_reference(value, reference.eval_cos, wi, wo, rtol=1e-4,
@@ -150,6 +164,11 @@ WRONG = [
     ("cooktorrance", "Smith's masking", lambda p, fit: {**p, "shadowing": "smith"}),
     ("lafortune", "normalize false", lambda p, fit: {**p, "normalize": False}),
     ("lafortune", "cz = cxy (Phong's mirror lobe)", lambda p, fit: {**p, "cz_0": -p["cx_0"]}),
+    ("he", "sigma0 and tau swapped", lambda p, fit: {**p, "sigma0": p["tau"] / 100,
+                                                       "tau": p["sigma0"] * 100}),
+    ("he", "the holzschuch reading", lambda p, fit: {**p, "variant": "holzschuch"}),
+    ("he", "eta = 1.5", lambda p, fit: {**p, "eta": 1.5}),
+    ("he", "no albedo", lambda p, fit: {**p, "specular_reflectance": 1.0}),
 ]
 
 
@@ -245,12 +264,13 @@ ERRORS = [
     ("ward", "bbm:gold-metallic-paint", 'must be "ngan:<material>" or'),
     ("ward", "gold-metallic-paint", 'must be "ngan:<material>" or'),
     ("ward", "ngan-foo:nickel", '"ngan-foo" names no fit file: the models are'),
-    ("ward", "ngan-he:nickel", "no plugin he yet"),
+    ("ward", "ngan-he:nickel", "the ngan-he fits are presets of he, not of ward"),
     ("phong", "ngan-ward:nickel", "the ngan-ward fits are presets of ward, not of phong"),
     ("ashikhmin", "ngan:nickel", "rises to A at grazing, whereas ashikhmin's is F of Rs"),
     ("cooktorrance", "ngan:colonial-maple-223", "4A/π of the fit's albedo A = [1.249"),
     ("lafortune", "ngan:black-phenolic", "specular_reflectance_0 would be the fit's albedo"),
     ("lafortune", "ngan:pvc", "above 1, the plugin's bound on a reflectance"),
+    ("he", "ngan:green-plastic", "the fit's eta is 1 as its file prints it (3 digits)"),
 ]
 
 
@@ -282,11 +302,11 @@ def test11_the_python_side_lists_materials_models_and_presets():
     assert presets.models("ward") == ["ward", "wardduer"] and presets.models("ashikhmin") == []
     counts = {p: len(presets.names(p)) for p in presets.DEFAULT_MODEL}
     assert counts == {"ward": 172, "phong": 86, "cooktorrance": 85, "lafortune": 84,
-                      "ashikhmin": 0}
+                      "ashikhmin": 0, "he": 82}
     assert "ngan-wardduer:blue-acrylic" in presets.names("ward")
     assert "ngan:colonial-maple-223" not in presets.names("cooktorrance")
     rows = {row[0]: row for row in presets.table()}
-    assert rows["he"][4].startswith("no plugin he yet")
+    assert rows["he"][4].startswith("exact: ngan:<material> (82 materials); westin's switch")
     assert rows["wardduer"][4] == "exact: ngan-wardduer:<material> (86 materials)"
 
 
@@ -310,12 +330,30 @@ def test12_the_plugins_reference_takes_the_preset(variant_scalar_rgb, plugin, pr
 
 @pytest.mark.filterwarnings("ignore:lafortune")  # maroon-plastic's albedo bound is 1.048
 def test13_every_preset_loads(variant_scalar_rgb):
-    """Each of the 427 presets that convert loads, with finite values at one pair."""
+    """Each of the 509 presets that convert loads (he's: one in eight), with finite values at
+    one pair."""
     si = mi.SurfaceInteraction3f()
     si.wi = mi.Vector3f(0.36, 0.0, 0.933)
     wo = mi.Vector3f(-0.28, 0.1, 0.955)
     for plugin in presets.DEFAULT_MODEL:
-        for name in presets.names(plugin):
+        # every he preset converts (names); one in eight loads, as each load tabulates its
+        # sampler (0.07 s) and the code is the same for all
+        for name in presets.names(plugin)[::8 if plugin == "he" else 1]:
             value = np.array(mi.load_dict({"type": plugin, "preset": name}).eval(
                 mi.BSDFContext(), si, wo))
             assert np.all(np.isfinite(value)) and np.all(value >= 0), (plugin, name)
+
+
+def test14_he_differs_from_bbm_in_its_blend_alone(variant_llvm_ad_rgb):
+    """Where bbm's NganHe blends the series into the asymptote (18 ≤ g ≤ 19) and westin's
+    reading switches at 18.5, the two part, by up to 11 % on nickel's fit (measured 0.113;
+    bounded here by 0.15); elsewhere they agree (test04)."""
+    fit = presets.fit("he", "nickel")
+    wi, wo = pairs(np.random.default_rng(7), 20000)
+    band = he_blend(fit, wi, wo)
+    value = eval_pdf(mi.load_dict({"type": "he", "preset": "ngan:nickel"}), wi[band],
+                     wo[band])[0]
+    want = NganFit("he", fit.diffuse, fit.params).eval_cos(wi[band], wo[band])
+    big = want > 1e-3 * want.max()
+    worst = np.max(np.abs(value[big] / want[big] - 1.0))
+    assert band.sum() > 100 and 1e-3 < worst <= 0.15, (band.sum(), worst)

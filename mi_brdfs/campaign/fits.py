@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..fit import ALBEDO_THETAS, fit, spec_text
-from ..fit.models import STYLES, models_for
+from ..fit.models import LECTURE, STYLES, models_for
 from ..plots import cube_root_lobe, lobe_values, pyplot, save_figure
 from .core import Context, Row, Section, image, md_table
 
@@ -91,7 +91,7 @@ def _fit_all(ctx: Context, sizes: dict, s: Section) -> tuple[dict, list]:
     fits, table = {}, []
     for label, target in TARGETS:
         fits[label] = {}
-        for name, model, free in models_for(target):
+        for name, model, free in [m for m in models_for(target) if m[0] in LECTURE]:
             result = fit(target, model, free, **sizes)
             fits[label][name] = result
             table.append((label, f"`{spec_text(result.model)}`", free or "all",
@@ -144,7 +144,7 @@ def _ranked(errors: dict, digits: str) -> str:
 def _claims(ctx: Context, s: Section, fits: dict) -> None:
     """The judged rows: Cook-Torrance follows the albedo best, no model the coated one (a
     quick run's fits are too short to judge them: 40 steps)."""
-    names = ", ".join(STYLES)
+    names = ", ".join(LECTURE)
     for label, _ in TARGETS:
         errors = {name: r.albedo_error for name, r in fits[label].items()}
         best = min(errors, key=errors.get)

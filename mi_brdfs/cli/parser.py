@@ -251,7 +251,7 @@ def _add_fit(sub) -> None:
                             "phong lobe=halfway diffuse_reflectance=0")
     which.add_argument("--models", metavar="all|M1,M2,...",
                        help="fit every lecture model (all: phong, ward, cooktorrance, ashikhmin, "
-                            "lafortune), or those named, from the lecture's starts (mi_brdfs.fit."
+                            "lafortune, he), or those named, from the lecture's starts (mi_brdfs.fit."
                             "models); write --out DIR/models.md (each scored under every metric "
                             "and ranked), models.json, lobes.png and spheres.png")
     ft.add_argument("--out", metavar="DIR", default=".",

@@ -1,8 +1,8 @@
 """
 Every lecture model fitted to one material, as Ngan, Durand & Matusik (2005, "Experimental
 Analysis of BRDF Models", EGSR) fit seven models to MERL's materials: ``mi-brdfs fit TARGET
---models all`` fits ``phong``, ``ward``, ``cooktorrance``, ``ashikhmin`` and ``lafortune`` to
-TARGET (measured data or any BSDF) under one metric, scores every fit under every metric of
+--models all`` fits ``phong``, ``ward``, ``cooktorrance``, ``ashikhmin``, ``lafortune`` and
+``he`` to TARGET (measured data or any BSDF) under one metric, scores every fit under every metric of
 :data:`~mi_brdfs.fit.optimise.METRICS` on the same pairs, ranks the models per metric, and
 draws the lobes in the plane of incidence at four incident angles (data and each fit) and a row
 of spheres rendered with the target and each fit.
@@ -15,7 +15,9 @@ Cook-Torrance (V-cavity masking, exact Fresnel) with the target's metal for a
 with the Fresnel term of a dielectric of free η (k = 0) over a Lambertian base of free albedo;
 Ashikhmin & Shirley (2000) isotropic over its own diffuse term; Lafortune et al. (1997) one
 lobe over a Lambertian term, starting as Phong's mirror lobe, C = (−1, −1, 1), with Cz, the
-exponent, ρs and ρd free (with ``normalize`` the lobe depends on C/max|C| only).
+exponent, ρs and ρd free (with ``normalize`` the lobe depends on C/max|C| only); He et al.
+(1991) as a dielectric of free η over its uniform diffuse term, σ0, τ (in log scale), the
+specular factor (within [0, 1]) and the diffuse albedo free.
 """
 
 from __future__ import annotations
@@ -37,23 +39,26 @@ CT_PLASTIC = ("cooktorrance eta=1.5 k=0 diffuse_reflectance=0.5",
 ASHIKHMIN = ("ashikhmin diffuse_reflectance=0.2 specular_reflectance=0.5", None)
 LAFORTUNE = ("lafortune diffuse_reflectance=0.2 specular_reflectance_0=0.5",
              "cz_0,exponent_0,specular_reflectance_0,diffuse_reflectance")
+HE = ("he sigma0=0.1 tau=3 eta=1.5 diffuse_reflectance=0.2",
+      "sigma0,tau,eta,specular_reflectance,diffuse_reflectance")
 
 #: The fitted models, in the order of the tables, with their colour and line in the figures.
 STYLES = {"phong": ("C0", "--"), "ward": ("C1", "-."), "cooktorrance": ("C3", ":"),
-          "ashikhmin": ("C2", "-"), "lafortune": ("C4", "--")}
+          "ashikhmin": ("C2", "-"), "lafortune": ("C4", "--"), "he": ("C5", "-.")}
+#: The five phenomenological lecture models (the validation campaign's fits compare these).
+LECTURE = ("phong", "ward", "cooktorrance", "ashikhmin", "lafortune")
 
 #: Incident angles of the lobe plots (degrees).
 LOBE_THETAS = (0.0, 30.0, 60.0, 80.0)
 
 
 def models_for(target) -> list:
-    """(name, model start, free) of the five lecture models for a target spec: Cook-Torrance
-    as a metal of the target's material for a ``roughconductor`` that names one, else as a
-    plastic."""
+    """(name, model start, free) of the six models for a target spec: Cook-Torrance as a metal
+    of the target's material for a ``roughconductor`` that names one, else as a plastic."""
     material = _conductor_material(target)
     ct = (f"cooktorrance material={material}", CT_METAL[1]) if material else CT_PLASTIC
     return [("phong", *PHONG), ("ward", *WARD), ("cooktorrance", *ct),
-            ("ashikhmin", *ASHIKHMIN), ("lafortune", *LAFORTUNE)]
+            ("ashikhmin", *ASHIKHMIN), ("lafortune", *LAFORTUNE), ("he", *HE)]
 
 
 def _conductor_material(target):

@@ -55,6 +55,10 @@ def _bounds(name: str):
         return "log1p", 0.0, 1e3
     if name == "sigma":
         return "square", 1e-3, math.pi / 2
+    if name == "sigma0":  # he's rms height and autocorrelation length (µm): scales
+        return "log", 1e-3, 10.0
+    if name == "tau":
+        return "log", 1e-2, 1e3
     if name.endswith(("reflectance", "transmittance")):
         return "linear", 0.0, 1.0
     return "linear", 0.0, math.inf

@@ -9,6 +9,7 @@ the sampler of measured data (:class:`mi_brdfs.measured.warp.Sampler`).
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 
 import drjit as dr
 import mitsuba as mi
@@ -24,8 +25,10 @@ DEFAULT_SIGMA0, DEFAULT_TAU = terms.DEFAULT_SIGMA0, terms.DEFAULT_TAU
 RGB_WAVELENGTHS, MONO_WAVELENGTH = terms.RGB_WAVELENGTHS, terms.MONO_WAVELENGTH
 
 #: The samplers of this variant (this module runs once per variant), by the surface's
-#: parameters: every instance of one surface shares one.
-_samplers: dict = {}
+#: parameters: every instance of one surface shares one; the latest :data:`KEPT` are kept (a
+#: fit or an optimisation moves σ0 and τ at every step).
+_samplers: OrderedDict = OrderedDict()
+KEPT = 16
 
 
 #: Mitsuba's visible range (µm; MI_CIE_MIN, MI_CIE_MAX), into which a wavelength is clamped.
@@ -74,6 +77,9 @@ class Surface:
                                    terms="variant" if self.count is None else self.count)
             _samplers[key] = warp.Sampler(*warp.density(
                 lambda wi, wo: model.directional_diffuse(wi, wo).mean(axis=-1)))
+            while len(_samplers) > KEPT:
+                _samplers.popitem(last=False)
+        _samplers.move_to_end(key)
         return _samplers[key]
 
 
@@ -114,7 +120,12 @@ class DirectionalDiffuse(lobes.TabulatedLobe):
 
     def __init__(self, surface: Surface, factor):
         self.surface, self.factor, self.component = surface, factor, 1
-        self.sampler = surface.sampler()
+
+    @property
+    def sampler(self) -> warp.Sampler:
+        """The tabulated sampler, built when first needed (``eval`` alone needs none: a fit
+        that moves σ0 and τ at every step builds none)."""
+        return self.surface.sampler()
 
     def value(self, si, wo, active):
         s = self.surface
@@ -178,6 +189,13 @@ class He(mi.BSDF):
        - |int|
        - The length of the series of the directional diffuse term (Default: the reading's:
          48 for ``westin``, 128 for ``paper``, 10 for ``holzschuch``)
+
+     * - preset
+       - |string|
+       - A published fit that fills every parameter the scene does not give (explicit ones
+         win): ``ngan:<material>``, Ngan et al. 2005's He fit to a MERL material (westin
+         reading; ``specular_reflectance`` its albedo); docs/presets.md lists the materials,
+         the conversion and what differs from bbm's model (Default: none)
 
     He, Torrance, Sillion & Greenberg (1991, "A Comprehensive Physical Model for Light
     Reflection", SIGGRAPH) derive reflection from Kirchhoff's scattering by a surface of
@@ -244,6 +262,7 @@ class He(mi.BSDF):
 
     def __init__(self, props):
         super().__init__(props)
+        properties.preset(props, PLUGIN)  # a preset's parameters, where the scene gives none
         self.m_sigma0 = mi.Float(properties.number(props, PLUGIN, "sigma0", DEFAULT_SIGMA0,
                                                    0.0, 1e3))
         self.m_tau = mi.Float(properties.number(props, PLUGIN, "tau", DEFAULT_TAU, 0.0, 1e4,
@@ -275,9 +294,11 @@ class He(mi.BSDF):
                                         self.m_specular_reflectance)
         peak *= 1.0 if factor is None else float(max(factor))
         if peak > 1.0 + 1e-3:
+            why = ("specular_reflectance included" if self.m_variant == "westin" else
+                   "only westin's reading keeps it under 1 on rough surfaces")
             properties.warn(PLUGIN, f"the directional diffuse term's albedo reaches {peak:.3g}"
-                                    f" > 1 in the {self.m_variant} reading (only westin keeps "
-                                    f"it under 1 on rough surfaces); values kept")
+                                    f" > 1 in the {self.m_variant} reading ({why}); values "
+                                    f"kept")
 
     sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
     eval_diffuse_reflectance = lobes.eval_diffuse_reflectance

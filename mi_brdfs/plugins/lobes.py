@@ -108,6 +108,10 @@ class Lobe:
         ``active`` or outside the lobe; f not depolarized (the mixture does it once)."""
         raise NotImplementedError
 
+    def eval(self, ctx, si, wo, active):
+        """f·|cosθo| of this term alone (what ``eval`` needs: no density, no weight)."""
+        return self.eval_pdf(ctx, si, wo, active)[0]
+
     def sample(self, ctx, si, sample1, sample2, active):
         """(ωo, valid): a direction from the lobe's strategy, and where that succeeded.
         ``sample1`` ∈ [0, 1) is the lobe's own (rescaled by the mixture that picked it)."""
@@ -163,6 +167,9 @@ class DeltaLobe(Lobe):
 
     def eval_pdf(self, ctx, si, wo, active):
         return mi.Spectrum(0.0), mi.Float(0.0)
+
+    def eval(self, ctx, si, wo, active):
+        return mi.Spectrum(0.0)
 
     def sample(self, ctx, si, sample1, sample2, active):
         return mi.Vector3f(-si.wi.x, -si.wi.y, si.wi.z), si.wi.z > 0
@@ -220,6 +227,12 @@ class TabulatedLobe(Lobe):
             return mi.Spectrum(0.0), mi.Float(0.0)
         value, pdf = self.value(si, wo, active), self.sampler.pdf(si.wi, wo, active)
         return dr.select(active, value, 0.0), dr.select(active, pdf, 0.0)
+
+    def eval(self, ctx, si, wo, active):
+        active = active & (si.wi.z > 0) & (wo.z > 0)
+        if none(active):
+            return mi.Spectrum(0.0)
+        return dr.select(active, self.value(si, wo, active), 0.0)
 
     def sample(self, ctx, si, sample1, sample2, active):
         wo, _, valid = self.sampler.sample(si.wi, sample2, active)
@@ -298,6 +311,19 @@ class Mixture:
             value = value + depolarize(v)
         return value, mixture.pdf(probs, pdfs)
 
+    def eval(self, ctx, si, wo, active=True):
+        """f·|cosθo|: the enabled lobes' sum, without their densities or weights (a tabulated
+        sampler is not built for it)."""
+        lobes = self.enabled(ctx)
+        if not lobes:
+            return mi.Spectrum(0.0)
+        wo = vector(wo)
+        value = None
+        for lobe in lobes:
+            v = depolarize(lobe.eval(ctx, si, wo, active))
+            value = v if value is None else value + v
+        return value
+
     def sample(self, ctx, si, sample1, sample2, active=True):
         """(BSDFSample3f, weight f·|cosθo|/pdf): ``sample1`` picks a lobe (and, rescaled, is
         that lobe's own), ``sample2`` draws ωo from it; bs.pdf is the mixture density at ωo."""
@@ -361,7 +387,7 @@ def sample(self, ctx, si, sample1, sample2, active=True):
 
 
 def eval(self, ctx, si, wo, active=True):
-    return self.lobes.eval_pdf(ctx, si, wo, active)[0]
+    return self.lobes.eval(ctx, si, wo, active)
 
 
 def pdf(self, ctx, si, wo, active=True):

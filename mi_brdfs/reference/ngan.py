@@ -19,7 +19,12 @@ independent of them. With h = (ωi + ωo)/‖ωi + ωo‖, θh its polar angle, 
   Schlick's with F0 = ``fresnelReflectance`` (Ashikhmin & Shirley 2000, the specular term);
 * ``lafortune``: S = (n+2)/(2π)·max(0, Cxy(ix ox + iy oy) + Cz iz oz)ⁿ/max(Cxy², Cz²)^(n/2)
   (Lafortune et al. 1997, eq. 4, with Ngan's normalisation), computed as (g/c)ⁿ with
-  c = max(|Cxy|, |Cz|), since gⁿ and cⁿ alone underflow float64 for the fits' exponents.
+  c = max(|Cxy|, |Cz|), since gⁿ and cⁿ alone underflow float64 for the fits' exponents;
+* ``he``: S = ρ_dd per channel, He et al.'s directional diffuse term as Westin et al.'s code
+  has it (:mod:`mi_brdfs.reference.he`, σ0 = ``roughness``, τ = ``autocorrelation``, real
+  η = ``eta``) at bbm's RGB wavelengths 0.645, 0.526 and 0.444 µm, with bbm's blend of the
+  series (1 − w) and Beckmann's asymptote (w), w = clamp(g − 18, 0, 1) (``he_base``'s
+  RoughApproxThreshold 18 of ``nganhe``); no delta.
 
 Directions are (n, 3) unit vectors in the local frame (normal +z); f is 0 unless both are above
 the surface.
@@ -31,8 +36,24 @@ import math
 
 import numpy as np
 
-#: The models written here (``he`` is not).
-MODELS = ("ward", "wardduer", "blinnphong", "cooktorrance", "ashikhminshirley", "lafortune")
+#: The models written here.
+MODELS = ("ward", "wardduer", "blinnphong", "cooktorrance", "ashikhminshirley", "lafortune",
+          "he")
+#: bbm's RGB wavelengths (µm) and the g over which its NganHe blends into the asymptote.
+HE_WAVELENGTHS, HE_BLEND = (0.645, 0.526, 0.444), (18.0, 19.0)
+
+
+def _he(p: dict, wi, wo) -> np.ndarray:
+    """ρ_dd of bbm's NganHe, (n, 3) (the module docstring)."""
+    from .he import HTSG, Variant, effective_roughness, phase_variance
+    surface = (p["roughness"], p["autocorrelation"], list(HE_WAVELENGTHS), p["eta"], 0.0)
+    series = HTSG(*surface, variant=Variant(True, True, None, None))
+    asymptote = HTSG(*surface, variant=Variant(True, True, None, 0.0))
+    sigma = effective_roughness(wi[:, 2], wo[:, 2], p["roughness"], p["autocorrelation"])
+    g = phase_variance(sigma, wi[:, 2], wo[:, 2], HE_WAVELENGTHS)
+    w = np.clip((g - HE_BLEND[0]) / (HE_BLEND[1] - HE_BLEND[0]), 0.0, 1.0)
+    return (1.0 - w) * series.directional_diffuse(wi, wo) + \
+        w * asymptote.directional_diffuse(wi, wo)
 
 
 def _unit(v):
@@ -55,8 +76,10 @@ class NganFit:
         self.albedo = np.asarray(params["albedo"], dtype=np.float64)
 
     def specular(self, wi, wo) -> np.ndarray:
-        """S(ωi, ωo), (n,), for both directions above the surface."""
+        """S(ωi, ωo), (n,) ((n, 3) for ``he``), for both directions above the surface."""
         p, ci, co = self.params, wi[:, 2], wo[:, 2]
+        if self.model == "he":
+            return _he(p, wi, wo)
         h = _unit(wi + wo)
         ch, ih = h[:, 2], np.sum(wi * h, axis=1)
         tan2 = (1.0 - ch * ch) / (ch * ch)
@@ -87,8 +110,9 @@ class NganFit:
         wi, wo = np.atleast_2d(wi).astype(np.float64), np.atleast_2d(wo).astype(np.float64)
         above = (wi[:, 2] > 0) & (wo[:, 2] > 0)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
-            s = np.where(above, self.specular(wi, wo), 0.0)
-        return np.where(above[:, None], self.rho_d / math.pi, 0.0) + s[:, None] * self.albedo
+            s = self.specular(wi, wo)
+        s = np.where(above[:, None], s if s.ndim == 2 else s[:, None], 0.0)
+        return np.where(above[:, None], self.rho_d / math.pi, 0.0) + s * self.albedo
 
     def eval_cos(self, wi, wo) -> np.ndarray:
         """f·cosθo, (n, 3): what a plugin's ``eval`` returns."""

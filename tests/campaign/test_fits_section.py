@@ -4,7 +4,7 @@ not from the residuals it is given (no fit here: made-up residuals; the section 
 ``mi-brdfs validate --only fits``).
 """
 
-from mi_brdfs.campaign.fits import STYLES, models_for, ngan_comparison, ranking
+from mi_brdfs.campaign.fits import LECTURE, STYLES, models_for, ngan_comparison, ranking
 
 #: Two targets: on "agrees" the ranking is Ngan et al.'s (Ashikhmin-Shirley and Cook-Torrance
 #: first, Ward and Blinn-Phong behind, Lafortune worse at grazing pairs than elsewhere); on
@@ -38,4 +38,5 @@ def test01_ngan_comparison_from_the_values():
 def test02_every_lecture_model_is_fitted_to_every_target():
     for target in ("roughconductor material=Au alpha=0.2", "roughplastic"):
         assert [name for name, _, _ in models_for(target)] == list(STYLES)
-    assert list(STYLES) == ["phong", "ward", "cooktorrance", "ashikhmin", "lafortune"]
+    assert list(STYLES) == ["phong", "ward", "cooktorrance", "ashikhmin", "lafortune", "he"]
+    assert LECTURE == ("phong", "ward", "cooktorrance", "ashikhmin", "lafortune")

@@ -3,7 +3,7 @@ The ``he`` plugin (He, Torrance, Sillion & Greenberg 1991) against the float64 r
 (mi_brdfs.reference.he): eval is the sum of the directional diffuse and uniform diffuse terms
 at the RGB wavelengths, the spectral variants' sampled wavelengths and a conductor's index, in
 the three readings and the smooth, intermediate and rough regimes; the delta's sample weight
-and probability; the smooth limit; χ² at 0°, 45° and 80°; consistency, reciprocity, the
+and probability; the smooth limit; χ² at 45° and 80°; stability from σ0 = 0 to 10 µm; consistency, reciprocity, the
 sampler's efficiency against the cosine; σ0 through mi.traverse; one-line errors. The terms
 themselves: tests/scattering/test_he_terms.py.
 """
@@ -162,10 +162,11 @@ def test06_the_smooth_limit(variant_llvm_ad_rgb, np_rng):
     np.testing.assert_allclose(s["weight"], np.repeat(f[:, None], 3, 1), rtol=1e-5)
 
 
-@pytest.mark.parametrize("theta", [0.0, 45.0, 80.0])
+@pytest.mark.parametrize("theta", [45.0, 80.0])
 def test07_sampling_matches_pdf(variant_llvm_ad_rgb, theta):
     """χ² of sample() against pdf() (the delta's samples counted as failed, as the battery
-    does), an intermediate surface with a uniform diffuse term."""
+    does), an intermediate surface with a uniform diffuse term, at 45° and 80° (normal
+    incidence too in the validation campaign's battery, `make validate`)."""
     t = np.radians(theta)
     assert_sampling_matches_pdf(_spec(sigma0=0.05, tau=1.5, diffuse_reflectance=0.2),
                                 wi=[np.sin(t), 0.0, np.cos(t)], sample_count=400_000)
@@ -218,3 +219,18 @@ def test10_energy_warnings(variant_scalar_rgb):
     with warnings.catch_warnings():
         warnings.simplefilter("error", MiBrdfsWarning)
         mi.load_dict(_spec(sigma0=0.3))
+
+
+def test11_stable_from_smooth_to_rough(variant_llvm_ad_rgb):
+    """No NaN, Inf or negative value at the stability sweep's stress directions (grazing,
+    normal, mirror, retro-reflection) from σ0 = 0 to σ0 = 10 µm (g from 0 to 10⁶), and in
+    Holzschuch's reading, with a uniform diffuse term."""
+    import warnings
+
+    from mi_brdfs.testing import assert_stable
+    specs = [_spec(sigma0=s, tau=3.0, variant=v, material="Au", diffuse_reflectance=0.1)
+             for s, v in ((0.0, "westin"), (0.003, "westin"), (0.3, "westin"),
+                          (10.0, "westin"), (0.3, "holzschuch"))]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the holzschuch reading's albedo above 1, as it is
+        assert_stable(specs)
