@@ -67,6 +67,13 @@ def _forward(theta_i, u, v):
     return wi, wo, 8.0 * np.pi ** 2 * cos_d * np.sin(theta_h) * u
 
 
+def _trapezoid(n: int) -> np.ndarray:
+    """The trapezoidal rule's weights of ``n`` nodes spanning [0, 1]."""
+    w = np.full(n, 1.0 / (n - 1))
+    w[[0, -1]] *= 0.5
+    return w
+
+
 def _mean_one(value):
     """``value`` (θi, v, u) divided by its mean over each θi node's grid (NaN where that is
     0)."""
@@ -82,8 +89,8 @@ def density(f_mean) -> tuple[np.ndarray, list[float], np.ndarray]:
     nodes; float32. ``f_mean(wi, wo)`` is f (the mean over
     channels) at (n, 3) direction pairs. The last node sits just under the horizon's θi = π/2,
     where f·cosθo would be 0 everywhere; a node where f is 0 everywhere is the cosine's alone.
-    albedo[t] = ∫ f cosθo dωo at node t, the mean of f·cosθo·J over the nodes (the square's
-    area is 1): the weight of a lobe sampled so, against the other lobes of a mixture.
+    albedo[t] = ∫ f cosθo dωo at node t, ∫∫ f·cosθo·J du dv by the trapezoidal rule over the
+    nodes: the weight of a lobe sampled so, against the other lobes of a mixture.
     """
     thetas = np.linspace(0.0, np.pi / 2, N_THETA)
     t, v, u = np.meshgrid(np.minimum(thetas, np.pi / 2 - 1e-3), np.linspace(0, 1, N_V),
@@ -95,7 +102,7 @@ def density(f_mean) -> tuple[np.ndarray, list[float], np.ndarray]:
     _, wo_any, jac_any = _forward(t, u, v)
     cosine = np.abs(wo_any[..., 2] * jac_any)
     cosine = _mean_one(np.where(valid, cosine, OUTSIDE * cosine))
-    albedo = value.mean(axis=(1, 2))
+    albedo = np.einsum("tba,b,a->t", value, _trapezoid(N_V), _trapezoid(N_U))
     value = _mean_one(value)
     mixed = (1.0 - DEFENSIVE_SHARE) * value + DEFENSIVE_SHARE * cosine
     return np.where(np.isnan(value), cosine, mixed).astype(np.float32), \
