@@ -21,9 +21,6 @@ from . import lobes, properties
 
 PLUGIN = "he"
 
-DEFAULT_SIGMA0, DEFAULT_TAU = terms.DEFAULT_SIGMA0, terms.DEFAULT_TAU
-RGB_WAVELENGTHS, MONO_WAVELENGTH = terms.RGB_WAVELENGTHS, terms.MONO_WAVELENGTH
-
 #: The samplers of this variant (this module runs once per variant), by the surface's
 #: parameters: every instance of one surface shares one; the latest :data:`KEPT` are kept (a
 #: fit or an optimisation moves σ0 and τ at every step).
@@ -37,13 +34,13 @@ VISIBLE = (0.36, 0.83)
 
 def wavelengths(si):
     """λ in µm per channel: the sampled wavelengths in spectral variants (clamped into
-    :data:`VISIBLE`: a default interaction has λ = 0), else :data:`RGB_WAVELENGTHS` or
-    :data:`MONO_WAVELENGTH`."""
+    :data:`VISIBLE`: a default interaction has λ = 0), else the RGB or monochrome ones of
+    :mod:`mi_brdfs.scattering.he`."""
     if mi.is_spectral:
         return dr.clip(si.wavelengths * 1e-3, *VISIBLE)
     if mi.is_monochromatic:
-        return mi.UnpolarizedSpectrum(MONO_WAVELENGTH)
-    return mi.UnpolarizedSpectrum(mi.Color3f(*RGB_WAVELENGTHS))
+        return mi.UnpolarizedSpectrum(terms.MONO_WAVELENGTH)
+    return mi.UnpolarizedSpectrum(mi.Color3f(*terms.RGB_WAVELENGTHS))
 
 
 def _representative(tex, default: float) -> float:
@@ -69,10 +66,11 @@ class Surface:
     def sampler(self) -> warp.Sampler:
         """The directional diffuse lobe's sampler, built from the float64 reference at RGB
         wavelengths and a representative index (shared by every instance of this surface)."""
-        key = (_scalar(self.sigma0), _scalar(self.tau), _representative(self.eta, 1.5),
-               _representative(self.k, 0.0), self.reading_name, self.count)
+        key = (properties.as_float(self.sigma0), properties.as_float(self.tau),
+               _representative(self.eta, 1.5), _representative(self.k, 0.0),
+               self.reading_name, self.count)
         if key not in _samplers:
-            model = reference.HTSG(key[0], key[1], wavelength=list(RGB_WAVELENGTHS),
+            model = reference.HTSG(key[0], key[1], wavelength=list(terms.RGB_WAVELENGTHS),
                                    eta=key[2], k=key[3], variant=self.reading_name,
                                    terms="variant" if self.count is None else self.count)
             _samplers[key] = warp.Sampler(*warp.density(
@@ -81,11 +79,6 @@ class Surface:
                 _samplers.popitem(last=False)
         _samplers.move_to_end(key)
         return _samplers[key]
-
-
-def _scalar(x) -> float:
-    """A parameter's value as a Python float (a one-lane array in JIT variants)."""
-    return float(x) if not dr.is_jit_v(type(x)) else float(dr.detach(x)[0])
 
 
 class Specular(lobes.DeltaLobe):
@@ -263,9 +256,9 @@ class He(mi.BSDF):
     def __init__(self, props):
         super().__init__(props)
         properties.preset(props, PLUGIN)  # a preset's parameters, where the scene gives none
-        self.m_sigma0 = mi.Float(properties.number(props, PLUGIN, "sigma0", DEFAULT_SIGMA0,
+        self.m_sigma0 = mi.Float(properties.number(props, PLUGIN, "sigma0", terms.DEFAULT_SIGMA0,
                                                    0.0, 1e3))
-        self.m_tau = mi.Float(properties.number(props, PLUGIN, "tau", DEFAULT_TAU, 0.0, 1e4,
+        self.m_tau = mi.Float(properties.number(props, PLUGIN, "tau", terms.DEFAULT_TAU, 0.0, 1e4,
                                                 lo_open=True))
         self.m_eta, self.m_k, self.m_material = properties.ior(props, PLUGIN, None)
         self.m_specular_reflectance = properties.texture(props, PLUGIN, "specular_reflectance",

@@ -34,7 +34,7 @@ def _types():
     return _T
 
 
-def _as_float(value) -> float:
+def as_float(value) -> float:
     """A Python float from a Python scalar or a width-1 drjit array."""
     return float(np.asarray(value, dtype=np.float64).ravel()[0])
 
@@ -68,11 +68,11 @@ def texture_range(tex) -> tuple[float, float] | None:
         return (min(r[0] for r in ranges), max(r[1] for r in ranges))
     if not tex.is_spatially_varying():
         try:
-            mean = _as_float(tex.mean())
+            mean = as_float(tex.mean())
         except RuntimeError:  # no mean either (mesh_attribute: values live on the shape)
             return None
         try:
-            hi = _as_float(tex.max())
+            hi = as_float(tex.max())
         except RuntimeError:  # Texture::max() is not implemented by every texture
             hi = mean
         # A constant texture's minimum is not exposed; its mean bounds it from above, which
