@@ -45,6 +45,11 @@ def variant_llvm_ad_rgb():
     return set_variant("llvm_ad_rgb")
 
 
+@pytest.fixture
+def variant_llvm_ad_spectral():
+    return set_variant("llvm_ad_spectral")
+
+
 @pytest.fixture(params=REQUIRED)
 def variants_rgb(request):
     """scalar_rgb and llvm_ad_rgb."""

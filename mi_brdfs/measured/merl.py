@@ -165,6 +165,11 @@ def read(path) -> np.ndarray:
                            f"channels of {int(np.prod(RES))} float64): truncated or padded")
     raw = np.frombuffer(data[12:], dtype="<f8").reshape((3,) + RES)
     values = raw * np.asarray(SCALES).reshape(3, 1, 1, 1)
+    bad = np.count_nonzero(~(raw < 0.0) & ~(np.abs(values) <= np.finfo(np.float32).max))
+    if bad:
+        raise MiBrdfsError(f"{path}: {bad} values are NaN or beyond float32's range (a "
+                           f"measured value is finite, an unmeasured one negative): not a "
+                           f"MERL file")
     return np.where(raw < 0.0, np.nan, values)
 
 

@@ -3,11 +3,9 @@ The importance sampler of a measured isotropic BRDF: ωo is drawn through its ha
 the square (u, v) of MERL's own warping of θh (Matusik et al. 2003: θh = (π/2)·u², finest about
 the specular peak) and of φh measured from the plane of incidence (φh = φi + π·(2v − 1)), from
 a density on (u, v) tabulated for a set of incident angles θi: f·cosθo times the Jacobian of
-(u, v) ↦ ωo, at the nodes of a regular grid. Mitsuba's ``MarginalContinuous2D1``, the sampler
-of its ``measured`` plugin (Dupuy & Jakob 2018, "An Adaptive Parameterization for Efficient
-Material Acquisition and Rendering", §5), interpolates that density bilinearly in (u, v) and
-linearly in θi, samples it by inversion and returns its exact density, so that
-pdf(ωo) = p(u, v | θi) / J with
+(u, v) ↦ ωo, at the nodes of a regular grid. :class:`Sampler` interpolates that density
+bilinearly in (u, v) and linearly in θi, samples it exactly in constant time and returns its
+density, so that pdf(ωo) = p(u, v | θi) / J with
 
     J = |∂ωo/∂(u, v)| = 4 (ωi·h) · sinθh · (π u) · 2π,
 
@@ -83,7 +81,7 @@ def _mean_one(value):
 
 def density(f_mean) -> tuple[np.ndarray, list[float], np.ndarray]:
     """
-    (data, θi nodes, albedo) for ``MarginalContinuous2D1``: at θi node t and (u, v) = (a/(N_U − 1),
+    (data, θi nodes, albedo) for :class:`Sampler`: at θi node t and (u, v) = (a/(N_U − 1),
     b/(N_V − 1)), data[t, b, a] is f·cosθo·J and, its :data:`DEFENSIVE_SHARE`, cosθo·J
     (:data:`OUTSIDE` times |cosθo·J| at invalid nodes), each normalised to mean 1 over the
     nodes; float32. ``f_mean(wi, wo)`` is f (the mean over
@@ -148,41 +146,130 @@ def to_square(wi, wo) -> tuple:
         dr.maximum(_jacobian(u, sin_h, cos_d), 0.0)
 
 
+def alias_table(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(prob, alias) of Walker's alias method for the discrete distribution ``p`` (n ≥ 1
+    probabilities, summing to 1), built by Vose's (1991, "A Linear Algorithm for Generating
+    Random Numbers with a Given Distribution") algorithm: draw c uniformly from the n entries,
+    keep it with probability prob[c], else take alias[c]."""
+    n = len(p)
+    scaled = np.asarray(p, np.float64) * n
+    prob, alias = np.ones(n), np.arange(n)
+    small = [i for i in range(n) if scaled[i] < 1.0]
+    large = [i for i in range(n) if scaled[i] >= 1.0]
+    while small and large:
+        s, g = small.pop(), large.pop()
+        prob[s], alias[s] = scaled[s], g
+        scaled[g] -= 1.0 - scaled[s]
+        (small if scaled[g] < 1.0 else large).append(g)
+    return prob, alias  # what is left (rounding) keeps itself: prob 1
+
+
+def _gather(kind, buffer, index):
+    """Row ``index`` of a table of rows of ``kind`` (NumPy rows with Python indices in scalar
+    variants)."""
+    if isinstance(buffer, np.ndarray):
+        return kind(*(float(x) for x in buffer[int(index)]))
+    return dr.gather(kind, buffer, index)
+
+
+def _bilerp(c, x):
+    """The bilinear interpolant of corners c = (v00, v10, v01, v11) at x in the unit square."""
+    return dr.lerp(dr.lerp(c[0], c[1], x.x), dr.lerp(c[2], c[3], x.x), x.y)
+
+
 class Sampler:
-    """A density of :func:`density` sampled in the current variant (Mitsuba's
-    ``MarginalContinuous2D1``): :meth:`pdf` at a direction, :meth:`sample` one with its
-    density."""
+    """
+    A density of :func:`density` in the current variant: p(u, v | θi) bilinear between the
+    nodes of each θi node's grid (normalised to 1 over the square), linear in θi; sampled and
+    evaluated at a direction in constant time.
+
+    A draw picks the θi node below or above ωi's with the probability of its interpolation
+    weight (``sample1``), a cell of that node's grid with Walker's alias method (Walker 1977,
+    "An Efficient Method for Generating Discrete Random Variables with General
+    Distributions") and the point within the cell by Mitsuba's ``square_to_bilinear``; so it
+    draws exactly the mixture the density describes, and costs a few gathers, where inverting
+    the marginal and conditional distributions costs a binary search in each.
+    """
 
     def __init__(self, data: np.ndarray, thetas: list, albedo: np.ndarray | None = None):
-        self.table = mi.MarginalContinuous2D1(data, [thetas])
         self.thetas = thetas
+        corners = np.stack([data[:, :-1, :-1], data[:, :-1, 1:], data[:, 1:, :-1],
+                            data[:, 1:, 1:]], axis=-1).astype(np.float64)
+        mass = corners.mean(axis=-1).reshape(len(thetas), -1)  # per cell, × its area
+        self.cells = mass.shape[1]
+        total = mass.sum(axis=1)
+        # p(u, v | θi) integrates to 1 over the square: the cells' area is 1/cells
+        corners = corners.reshape(len(thetas), self.cells, 4) * (self.cells / total)[:, None,
+                                                                                       None]
+        aliases = [alias_table(m / t) for m, t in zip(mass, total)]
+        pairs = np.stack([np.concatenate([a[0] for a in aliases]),
+                          np.concatenate([a[1] for a in aliases])], axis=1)
+        corners = corners.reshape(-1, 4).astype(np.float32)
+        pairs = pairs.astype(np.float32)  # alias indices < 2**24: exact
+        if dr.is_jit_v(mi.Float):  # scalar variants keep NumPy rows (:func:`_gather`)
+            corners, pairs = mi.Float(corners.ravel()), mi.Float(pairs.ravel())
+        self.corners, self.pairs = corners, pairs
         #: The largest albedo of the density's f at its nodes (0 without ``albedo``).
         self.albedo_max = 0.0 if albedo is None else float(np.max(albedo))
         if albedo is not None:
             self.albedo_nodes = albedo if not dr.is_jit_v(mi.Float) else mi.Float(albedo)
 
+    def _nodes(self, wi):
+        """(i, w): ωi's θi lies between nodes i and i + 1, w the weight of i + 1."""
+        x = theta(wi) * ((len(self.thetas) - 1) / (0.5 * dr.pi))
+        i = dr.clip(mi.UInt32(dr.floor(x)), 0, len(self.thetas) - 2)
+        return i, dr.clip(x - mi.Float(i), 0.0, 1.0)
+
     def albedo(self, wi):
         """The albedo of :func:`density` at θi of ωi, linear between the nodes."""
-        t = theta(wi)
         if not dr.is_jit_v(mi.Float):  # scalar variants: one lane, NumPy
-            return float(np.interp(t, self.thetas, self.albedo_nodes))
-        x = t * ((len(self.thetas) - 1) / (0.5 * dr.pi))
-        i = dr.clip(mi.UInt32(dr.floor(x)), 0, len(self.thetas) - 2)
-        w = dr.clip(x - mi.Float(i), 0.0, 1.0)
+            return float(np.interp(theta(wi), self.thetas, self.albedo_nodes))
+        i, w = self._nodes(wi)
         a0 = dr.gather(mi.Float, self.albedo_nodes, i)
         return dr.lerp(a0, dr.gather(mi.Float, self.albedo_nodes, i + 1), w)
+
+    def _density(self, i, w, cell, x, active):
+        """p(u, v | θi) at the point x of ``cell`` (its index in a node's grid)."""
+        below = _bilerp(_gather(mi.Vector4f, self.corners, i * self.cells + cell), x)
+        above = _bilerp(_gather(mi.Vector4f, self.corners, (i + 1) * self.cells + cell), x)
+        return dr.select(active, dr.lerp(below, above, w), 0.0)
+
+    def density(self, wi, uv, active=True):
+        """p(u, v | θi of ωi) (per unit area of the square)."""
+        i, w = self._nodes(wi)
+        n_u, n_v = N_U - 1, N_V - 1
+        a = dr.clip(mi.UInt32(dr.floor(uv.x * n_u)), 0, n_u - 1)
+        b = dr.clip(mi.UInt32(dr.floor(uv.y * n_v)), 0, n_v - 1)
+        x = mi.Point2f(uv.x * n_u - mi.Float(a), uv.y * n_v - mi.Float(b))
+        return self._density(i, w, b * n_u + a, x, active)
 
     def pdf(self, wi, wo, active):
         """The density of :meth:`sample` at ωo (solid angle)."""
         uv, jac = to_square(wi, wo)
-        p = self.table.eval(uv, [theta(wi)], active)
         ok = active & (jac > 0)
+        p = self.density(wi, uv, ok)
         return dr.select(ok, p / dr.select(ok, jac, 1.0), 0.0)
 
-    def sample(self, wi, sample2, active):
+    def sample(self, wi, sample1, sample2, active):
         """(ωo, its density, valid): one draw; the density comes with it, the same as
         :meth:`pdf` at ωo up to rounding."""
-        uv, p = self.table.sample(sample2, [theta(wi)], active)
+        i, w = self._nodes(wi)
+        node = dr.select(sample1 < w, i + 1, i)
+        x = sample2.x * self.cells
+        c = dr.minimum(mi.UInt32(x), self.cells - 1)
+        r = x - mi.Float(c)
+        pair = _gather(mi.Vector2f, self.pairs, node * self.cells + c)
+        keep = r < pair.x
+        cell = dr.select(keep, c, mi.UInt32(pair.y))
+        r = dr.select(keep, r / dr.select(keep, pair.x, 1.0),
+                      (r - pair.x) / dr.maximum(1.0 - pair.x, 1e-30))
+        corners = _gather(mi.Vector4f, self.corners, node * self.cells + cell)
+        x, _ = mi.warp.square_to_bilinear(corners.x, corners.y, corners.z, corners.w,
+                                          mi.Point2f(dr.clip(r, 0.0, 1.0), sample2.y))
+        n_u = N_U - 1
+        a, b = cell % n_u, cell // n_u
+        uv = mi.Point2f((mi.Float(a) + x.x) / n_u, (mi.Float(b) + x.y) / (N_V - 1))
         wo, jac, valid = to_direction(wi, uv)
-        ok = valid & (jac > 0)
+        ok = active & valid & (jac > 0)
+        p = self._density(i, w, cell, x, ok)
         return wo, dr.select(ok, p / dr.select(ok, jac, 1.0), 0.0), ok

@@ -235,11 +235,11 @@ class TabulatedLobe(Lobe):
         return dr.select(active, self.value(si, wo, active), 0.0)
 
     def sample(self, ctx, si, sample1, sample2, active):
-        wo, _, valid = self.sampler.sample(si.wi, sample2, active)
+        wo, _, valid = self.sampler.sample(si.wi, sample1, sample2, active)
         return wo, valid
 
     def sample_alone(self, ctx, si, sample1, sample2, active):
-        wo, pdf, valid = self.sampler.sample(si.wi, sample2, active)
+        wo, pdf, valid = self.sampler.sample(si.wi, sample1, sample2, active)
         ok = active & valid & (si.wi.z > 0) & (pdf > 0)
         if none(ok):
             return wo, ok, mi.Spectrum(0.0), mi.Float(0.0)

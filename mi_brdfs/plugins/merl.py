@@ -42,29 +42,60 @@ def _columns(rgb: np.ndarray) -> np.ndarray:
     return np.concatenate([coefficients, scale], axis=1).astype(np.float32)
 
 
+#: The headroom of half precision: values are stored divided by a power of two that puts
+#: the largest at most here (half precision's largest is 65504).
+HALF_PEAK = 2.0 ** 15
+#: The relative rounding of a value stored in half precision (11 significant bits).
+HALF_EPSILON = 2.0 ** -11
+
+
+def _stored(columns: np.ndarray) -> tuple[np.ndarray, float]:
+    """(rows, unit): the bins' values as stored, ``rows · unit``. RGB and luminance in half
+    precision, RGB padded to four channels (a row is one aligned 8-byte load, where a
+    three-channel one is three): half the memory of float32, which an interpolated lookup in
+    a table of 1.46 million bins is bound by (rounding ≤ :data:`HALF_EPSILON` relative, well
+    under the interpolation error); unit, a power of two, keeps the largest value in range.
+    Spectral coefficients stay in float32: they are a polynomial's coefficients inside a
+    sigmoid, whose rounding to half precision would move the spectra ten times more than the
+    values' own (tests/plugins/test_merl.py::test07b_spectral_coefficients_in_float32)."""
+    if mi.is_spectral:
+        return columns, 1.0
+    peak = float(columns.max())
+    unit = 2.0 ** math.ceil(math.log2(peak / HALF_PEAK)) if peak > 0 else 1.0
+    rows = np.zeros((len(columns), 4 if columns.shape[1] == 3 else 1), np.float16)
+    rows[:, :columns.shape[1]] = columns / unit
+    return rows, unit
+
+
 class Table:
-    """One measured file in this variant: the bins' values (:func:`_columns`) and the
-    sampler of their density (:class:`mi_brdfs.measured.warp.Sampler`)."""
+    """One measured file in this variant: the bins' values (:func:`_columns`, stored as
+    :func:`_stored`) and the sampler of their density
+    (:class:`mi_brdfs.measured.warp.Sampler`)."""
 
     def __init__(self, measured: data.Measured):
         columns = _columns(measured.rgb)
         self.channels = columns.shape[1]
+        rows, self.unit = _stored(columns)
         # scalar variants call the methods with Python numbers: the rows stay in NumPy
-        scalar = not dr.is_jit_v(mi.Float)
-        self.buffer = columns if scalar else mi.Float(columns.ravel())
+        if not dr.is_jit_v(mi.Float):
+            self.buffer = rows
+        else:
+            kind = mi.Float if rows.dtype == np.float32 else dr.float16_array_t(mi.Float)
+            self.buffer = kind(rows.ravel())
+        self.row = {1: mi.Float, 3: mi.Vector4f, 4: mi.Vector4f}[self.channels]
+        if rows.dtype == np.float16:
+            self.row = dr.float16_array_t(self.row)
         self.sampler = warp.Sampler(measured.density, measured.thetas)
         self.unmeasured = measured.unmeasured
 
     def spectrum(self, index, si):
         """f in bin ``index`` (flat) as ``UnpolarizedSpectrum`` at ``si.wavelengths``."""
         if isinstance(index, int):
-            c = [float(x) for x in self.buffer[index]]
-        elif self.channels == 1:
-            c = [dr.gather(mi.Float, self.buffer, index)]
-        else:  # one packed gather of the bin's row
-            row = dr.gather(mi.Vector3f if self.channels == 3 else mi.Vector4f, self.buffer,
-                            index)
-            c = [row[k] for k in range(self.channels)]
+            c = [float(x) * self.unit for x in self.buffer[index][:self.channels]]
+        else:  # one gather of the bin's row
+            row = dr.gather(self.row, self.buffer, index)
+            row = [row] if self.channels == 1 else [row[k] for k in range(self.channels)]
+            c = [mi.Float(x) * self.unit for x in row]
         if mi.is_spectral:
             return mi.srgb_model_eval(mi.Vector3f(c[0], c[1], c[2]), si.wavelengths) * c[3]
         return mi.UnpolarizedSpectrum(c[0] if mi.is_monochromatic else mi.Color3f(*c))
@@ -135,15 +166,19 @@ class Merl(mi.BSDF):
 
     **Sampling.** ωo is drawn through the half vector from a density tabulated per incident
     angle (16 angles; a 64 × 32 grid over (√θh, φh − φi)) that is f·cosθo times the
-    Jacobian of the map, interpolated and sampled by Mitsuba's ``MarginalContinuous2D1``
-    (the sampler of its ``measured`` plugin, Dupuy & Jakob 2018), with an exact pdf; a tenth
+    Jacobian of the map, bilinear in the grid and linear in θi, sampled in constant time
+    (a θi node by its interpolation weight, a cell by Walker's 1977 alias method, the point
+    in it by Mitsuba's ``square_to_bilinear``) with an exact pdf; a tenth
     of that density is the cosine-weighted hemisphere's carried into the grid (a defensive
     mixture, Hesterberg 1995), so the density is positive wherever f is.
 
     **Variants.** The data are RGB. RGB variants use them as they are, monochrome ones their
     luminance, spectral ones Mitsuba's smooth spectra of RGB (Jakob & Hanika 2019) of each bin,
     scaled as Mitsuba scales unbounded RGB (s = 2·max(RGB)) and interpolated as spectra.
-    Polarized variants get a depolarizer: the data describe no polarization.
+    Polarized variants get a depolarizer: the data describe no polarization. RGB and
+    monochrome variants store the bins in half precision (relative rounding ≤ 2⁻¹¹, far under
+    the interpolation error; a power-of-two unit keeps the largest in range): the lookup is
+    bound by memory. Spectral ones keep their coefficients in float32.
 
     **Loading.** A file is read once per process while it is unchanged (about 35 MB: a few
     tenths of a second); every instance that names it shares its tables. A missing, short,

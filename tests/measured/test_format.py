@@ -30,7 +30,8 @@ def test01_half_diff_closed_forms():
     th, ph, td, pd = merl.half_diff(_unit(0.0, 0.0)[None], _unit(b, 0.0)[None])
     assert np.allclose([th[0], ph[0], td[0], abs(pd[0])], [b / 2, 0.0, b / 2, np.pi], atol=1e-12)
     rng = np.random.default_rng(1)
-    wi, wo = _unit(rng.random(50), 6 * rng.random(50)).T, _unit(rng.random(50), 6 * rng.random(50)).T
+    wi = _unit(rng.random(50), 6 * rng.random(50)).T
+    wo = _unit(rng.random(50), 6 * rng.random(50)).T
     rot = 0.9
     c, s = np.cos(rot), np.sin(rot)
     turn = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
@@ -99,9 +100,15 @@ def test04_file_bytes_and_round_trip(tmp_path):
                                                              "MERL's (90, 90, 180)"),
     (np.array([90, 90, 180], "<i4").tobytes() + b"\0" * 64, "76 bytes where a MERL file has "
                                                             "34992012"),
+    ("nan", "1 values are NaN or beyond float32's range"),
+    ("huge", "1 values are NaN or beyond float32's range"),
 ])
 def test05_bad_files_are_one_line(tmp_path, content, message):
     path = tmp_path / "bad.binary"
+    if isinstance(content, str):  # a complete file, one value NaN or 1e300
+        raw = np.zeros(3 * 90 * 90 * 180)
+        raw[1234] = np.nan if content == "nan" else 1e300
+        content = np.array([90, 90, 180], "<i4").tobytes() + raw.astype("<f8").tobytes()
     if content is not None:
         path.write_bytes(content)
     with pytest.raises(MiBrdfsError, match="bad.binary: ") as e:

@@ -4,7 +4,9 @@ built with and the drjit map the plugin samples with are one map, the drjit inve
 and its Jacobian J, in closed form in both, equals |∂ωo/∂u × ∂ωo/∂v| by central differences.
 """
 
+import drjit as dr
 import mitsuba as mi
+import pytest
 import numpy as np
 
 from mi_brdfs.measured import warp
@@ -56,15 +58,15 @@ def test02_the_drjit_map_is_the_float64_one(variant_llvm_ad_rgb):
 
 def _density_at(f_mean, theta, u, v):
     """The sampler's density p(u, v | θi) of :func:`warp.density` built from ``f_mean``."""
-    data, thetas, _ = warp.density(f_mean)
-    sampler = mi.MarginalContinuous2D1(data, [thetas])
+    sampler = warp.Sampler(*warp.density(f_mean))
     uv = mi.Point2f(mi.Float(u.astype(np.float32)), mi.Float(v.astype(np.float32)))
-    return np.array(sampler.eval(uv, [mi.Float(theta.astype(np.float32))]))
+    t = mi.Float(theta.astype(np.float32))
+    return np.array(sampler.density(mi.Vector3f(dr.sin(t), 0.0, dr.cos(t)), uv))
 
 
 def test03_the_density_is_positive_wherever_f_is(variant_llvm_ad_rgb, monkeypatch):
-    """f non-zero at one node of each θi's grid alone (a lobe the grid all but misses): the defensive
-    share keeps the density positive at every valid (u, v), where f·cosθo/pdf stays bounded;
+    """f non-zero at one node of each θi's grid alone (a lobe the grid all but misses): the
+    defensive share keeps the density positive at every valid (u, v), where f·cosθo/pdf stays bounded;
     with no defensive share it is 0 almost everywhere (rejected)."""
     def spike(wi, wo):  # 1 at the node (u, v) = (32/63, 16/31) of each θi, else 0
         target = warp.forward(np.arctan2(wi[:, 0], wi[:, 2]), 32 / 63, 16 / 31)[1]
@@ -102,3 +104,38 @@ def test04_the_tabulated_albedo(variant_llvm_ad_rgb):
                      mi.Float(np.cos(t).astype(np.float32)))
     np.testing.assert_allclose(np.array(sampler.albedo(wi)), np.interp(t, thetas, albedo),
                                rtol=1e-5)
+
+
+@pytest.mark.parametrize("kind", ["random", "one", "uniform", "zeros"])
+def test05_alias_table(kind):
+    """Walker's alias table draws each entry with its probability: prob[c]/n from its own
+    column plus (1 − prob[c'])/n from each column c' whose alias it is, exactly (to float64
+    rounding), for random, one-entry, uniform and sparse distributions. A table whose
+    columns forget their alias (prob = 1 everywhere, uniform) fails on the others."""
+    rng = np.random.default_rng(7)
+    p = {"random": rng.random(1953) ** 4, "one": np.eye(1, 300, 17)[0],
+         "uniform": np.ones(64), "zeros": np.where(rng.random(500) < 0.1, rng.random(500), 0)}[kind]
+    p = p / p.sum()
+
+    def drawn(prob, alias):
+        n = len(prob)
+        return (prob + np.bincount(alias, weights=1.0 - prob, minlength=n)) / n
+
+    prob, alias = warp.alias_table(p)
+    assert np.all((prob >= 0) & (prob <= 1)) and alias.min() >= 0 and alias.max() < len(p)
+    np.testing.assert_allclose(drawn(prob, alias), p, rtol=0, atol=1e-12)
+    if kind != "uniform":
+        assert np.max(np.abs(drawn(np.ones(len(p)), alias) - p)) > 1e-3
+
+
+def test06_sampler_density_integrates_to_one(variant_llvm_ad_rgb):
+    """p(u, v | θi) of the sampler integrates to 1 over the square at θi between the nodes
+    (midpoint rule on a fine grid; bilinear cells, linear in θi), for a density that varies
+    by orders of magnitude; a sampler that forgot to normalise one node fails."""
+    sampler = warp.Sampler(*warp.density(lambda wi, wo: np.exp(-20 * (1 - wo[:, 2]))))
+    n = 512
+    u, v = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(n) + 0.5) / n)
+    uv = mi.Point2f(mi.Float(u.ravel().astype(np.float32)), mi.Float(v.ravel().astype(np.float32)))
+    for t in np.radians([0.0, 3.0, 45.0, 71.0, 89.0]):
+        wi = mi.Vector3f(float(np.sin(t)), 0.0, float(np.cos(t)))
+        assert np.mean(np.array(sampler.density(wi, uv))) == pytest.approx(1.0, rel=1e-3)
