@@ -42,12 +42,18 @@ def load(path) -> Measured:
     return _load(str(path.resolve()), stat.st_mtime_ns, stat.st_size)
 
 
+@functools.lru_cache(maxsize=1)
+def _above() -> np.ndarray:
+    """The bins whose centre has both directions above the surface (1.46 million flags, built
+    once: the directions of every bin take a few tenths of a second)."""
+    wi, wo = merl.bin_directions()
+    return ((wi[:, 2] > 0) & (wo[:, 2] > 0)).reshape(merl.RES)
+
+
 @functools.lru_cache(maxsize=8)
 def _load(path: str, mtime_ns: int, size: int) -> Measured:
     values = merl.read(path)
-    wi, wo = merl.bin_directions()
-    above = ((wi[:, 2] > 0) & (wo[:, 2] > 0)).reshape(merl.RES)
-    unmeasured = int((np.isnan(values[0]) & above).sum())
+    unmeasured = int((np.isnan(values[0]) & _above()).sum())
     values = np.nan_to_num(values, nan=0.0)
     density, thetas, _ = warp.density(lambda wi, wo: merl.interpolate(values, wi, wo).mean(axis=-1))
     rgb = np.moveaxis(values, 0, -1).reshape(-1, 3).astype(np.float32)
