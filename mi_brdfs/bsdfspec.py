@@ -23,6 +23,7 @@ import json
 import os
 import re
 import shlex
+import weakref
 from xml.sax.saxutils import quoteattr
 
 from .errors import MiBrdfsError, mitsuba_error_line
@@ -271,11 +272,32 @@ _object_names = (f"mi_brdfs_loaded_bsdf_{i}" for i in itertools.count())
 
 
 def _object_plugin(bsdf) -> str:
-    """The name of a BSDF plugin, registered now, whose every instance is ``bsdf`` itself."""
+    """
+    The name of a BSDF plugin, registered now, whose every instance is ``bsdf`` itself.
+
+    Mitsuba keeps a registered plugin for the life of the process, and a JIT render traces the
+    methods of every BSDF alive in the process into its kernels (a symbolic virtual call
+    records each registered instance): a plugin that held its object would keep it alive, and
+    every later render would pay for it. The plugin holds a Python plugin's object weakly (it
+    lives while its caller or a scene holds it); a built-in's, which cannot be referenced
+    weakly, strongly.
+    """
     import mitsuba as mi
 
     name = next(_object_names)
-    mi.register_bsdf(name, lambda props, bsdf=bsdf: bsdf)
+    try:
+        ref = weakref.ref(bsdf)
+    except TypeError:
+        ref = lambda: bsdf  # noqa: E731
+
+    def instance(props):
+        obj = ref()
+        if obj is None:
+            raise MiBrdfsError(f"<bsdf type=\"{name}\">: the loaded BSDF it stands for has "
+                               "been freed; keep a reference to it while scenes name it")
+        return obj
+
+    mi.register_bsdf(name, instance)
     return name
 
 

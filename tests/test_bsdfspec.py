@@ -59,6 +59,26 @@ def test02_furnace_render_of_a_loaded_bsdf_in_jit(variant_llvm_ad_rgb):
     assert result.passed, result.message  # ρ = 1: the sphere vanishes into the furnace
 
 
+def test02b_a_scene_does_not_keep_a_loaded_bsdf_alive(variant_llvm_ad_rgb):
+    """A loaded Python plugin put into a scene lives while its caller or the scene holds it:
+    every BSDF alive in the process is traced into each JIT render, so one that the plugin
+    registry kept would slow every later render. Once freed, the XML that named it is one
+    line."""
+    import gc
+    import weakref
+
+    loaded = mi.load_dict({"type": "lambert", "reflectance": 0.5})
+    ref = weakref.ref(loaded)
+    scene = load_scene("furnace", {"res": "8"}, bsdfs={"material": loaded})
+    assert np.all(np.isfinite(np.array(mi.render(scene, spp=1))))
+    xml = bsdfspec.to_xml(loaded)
+    del scene, loaded
+    gc.collect()
+    assert ref() is None
+    with pytest.raises(RuntimeError, match="the loaded BSDF it stands for has been freed"):
+        mi.load_string(f'<scene version="3.0.0">{xml}</scene>')
+
+
 def test03_reference_for_every_form(variant_scalar_rgb):
     """for_spec parses every form; the float64 model exists for the forms that name parameters."""
     assert reference.for_spec(FORMS["dict"]()).albedo(0.0)[0] == pytest.approx(0.6)
