@@ -164,7 +164,7 @@ def alias_table(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return prob, alias  # what is left (rounding) keeps itself: prob 1
 
 
-def _gather(kind, buffer, index):
+def gather_row(kind, buffer, index):
     """Row ``index`` of a table of rows of ``kind`` (NumPy rows with Python indices in scalar
     variants)."""
     if isinstance(buffer, np.ndarray):
@@ -206,7 +206,7 @@ class Sampler:
                           np.concatenate([a[1] for a in aliases])], axis=1)
         corners = corners.reshape(-1, 4).astype(np.float32)
         pairs = pairs.astype(np.float32)  # alias indices < 2**24: exact
-        if dr.is_jit_v(mi.Float):  # scalar variants keep NumPy rows (:func:`_gather`)
+        if dr.is_jit_v(mi.Float):  # scalar variants keep NumPy rows (:func:`gather_row`)
             corners, pairs = mi.Float(corners.ravel()), mi.Float(pairs.ravel())
         self.corners, self.pairs = corners, pairs
         #: The largest albedo of the density's f at its nodes (0 without ``albedo``).
@@ -230,8 +230,8 @@ class Sampler:
 
     def _density(self, i, w, cell, x, active):
         """p(u, v | θi) at the point x of ``cell`` (its index in a node's grid)."""
-        below = _bilerp(_gather(mi.Vector4f, self.corners, i * self.cells + cell), x)
-        above = _bilerp(_gather(mi.Vector4f, self.corners, (i + 1) * self.cells + cell), x)
+        below = _bilerp(gather_row(mi.Vector4f, self.corners, i * self.cells + cell), x)
+        above = _bilerp(gather_row(mi.Vector4f, self.corners, (i + 1) * self.cells + cell), x)
         return dr.select(active, dr.lerp(below, above, w), 0.0)
 
     def density(self, wi, uv, active=True):
@@ -258,12 +258,12 @@ class Sampler:
         x = sample2.x * self.cells
         c = dr.minimum(mi.UInt32(x), self.cells - 1)
         r = x - mi.Float(c)
-        pair = _gather(mi.Vector2f, self.pairs, node * self.cells + c)
+        pair = gather_row(mi.Vector2f, self.pairs, node * self.cells + c)
         keep = r < pair.x
         cell = dr.select(keep, c, mi.UInt32(pair.y))
         r = dr.select(keep, r / dr.select(keep, pair.x, 1.0),
                       (r - pair.x) / dr.maximum(1.0 - pair.x, 1e-30))
-        corners = _gather(mi.Vector4f, self.corners, node * self.cells + cell)
+        corners = gather_row(mi.Vector4f, self.corners, node * self.cells + cell)
         x, _ = mi.warp.square_to_bilinear(corners.x, corners.y, corners.z, corners.w,
                                           mi.Point2f(dr.clip(r, 0.0, 1.0), sample2.y))
         n_u = N_U - 1

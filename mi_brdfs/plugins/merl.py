@@ -90,12 +90,9 @@ class Table:
 
     def spectrum(self, index, si):
         """f in bin ``index`` (flat) as ``UnpolarizedSpectrum`` at ``si.wavelengths``."""
-        if isinstance(index, int):
-            c = [float(x) * self.unit for x in self.buffer[index][:self.channels]]
-        else:  # one gather of the bin's row
-            row = dr.gather(self.row, self.buffer, index)
-            row = [row] if self.channels == 1 else [row[k] for k in range(self.channels)]
-            c = [mi.Float(x) * self.unit for x in row]
+        row = warp.gather_row(self.row, self.buffer, index)  # one gather of the bin's row
+        row = [row] if self.channels == 1 else [row[k] for k in range(self.channels)]
+        c = [mi.Float(x) * self.unit for x in row]
         if mi.is_spectral:
             return mi.srgb_model_eval(mi.Vector3f(c[0], c[1], c[2]), si.wavelengths) * c[3]
         return mi.UnpolarizedSpectrum(c[0] if mi.is_monochromatic else mi.Color3f(*c))
