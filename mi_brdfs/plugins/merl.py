@@ -45,15 +45,13 @@ def _columns(rgb: np.ndarray) -> np.ndarray:
 #: The headroom of half precision: values are stored divided by a power of two that puts
 #: the largest at most here (half precision's largest is 65504).
 HALF_PEAK = 2.0 ** 15
-#: The relative rounding of a value stored in half precision (11 significant bits).
-HALF_EPSILON = 2.0 ** -11
 
 
 def _stored(columns: np.ndarray) -> tuple[np.ndarray, float]:
     """(rows, unit): the bins' values as stored, ``rows · unit``. RGB and luminance in half
     precision, RGB padded to four channels (a row is one aligned 8-byte load, where a
     three-channel one is three): half the memory of float32, which an interpolated lookup in
-    a table of 1.46 million bins is bound by (rounding ≤ :data:`HALF_EPSILON` relative, well
+    a table of 1.46 million bins is bound by (relative rounding ≤ 2⁻¹¹: 11 significant bits, well
     under the interpolation error); unit, a power of two, keeps the largest value in range.
     Spectral coefficients stay in float32: they are a polynomial's coefficients inside a
     sigmoid, whose rounding to half precision would move the spectra ten times more than the
@@ -76,15 +74,11 @@ class Table:
         columns = _columns(measured.rgb)
         self.channels = columns.shape[1]
         rows, self.unit = _stored(columns)
+        stored = dr.float16_array_t if rows.dtype == np.float16 else (lambda kind: kind)
+        self.row = stored({1: mi.Float, 3: mi.Vector4f, 4: mi.Vector4f}[self.channels])
         # scalar variants call the methods with Python numbers: the rows stay in NumPy
-        if not dr.is_jit_v(mi.Float):
-            self.buffer = rows
-        else:
-            kind = mi.Float if rows.dtype == np.float32 else dr.float16_array_t(mi.Float)
-            self.buffer = kind(rows.ravel())
-        self.row = {1: mi.Float, 3: mi.Vector4f, 4: mi.Vector4f}[self.channels]
-        if rows.dtype == np.float16:
-            self.row = dr.float16_array_t(self.row)
+        scalar = not dr.is_jit_v(mi.Float)
+        self.buffer = rows if scalar else stored(mi.Float)(rows.ravel())
         self.sampler = warp.Sampler(measured.density, measured.thetas)
         self.unmeasured = measured.unmeasured
 
