@@ -115,9 +115,32 @@ def test04b_eval_of_random_data(variant_llvm_ad_rgb, np_rng, tmp_path):
                                wo, "random data")
 
 
+def test04c_blocks_of_eight_bins_on_one_cache_line(variant_llvm_ad_rgb):
+    """The table is stored in blocks of 2 × 2 × 2 bins (lookup.position), a permutation of the
+    bins; a block is 8 consecutive rows, 64 bytes of half-precision RGBA, and the table starts
+    on a 64-byte boundary. MERL's own order (φd fastest) fails the block check."""
+    order = lookup.stored_order()
+    assert np.array_equal(np.sort(order), np.arange(np.prod(merl.RES)))
+    i, j, k = np.meshgrid(*(np.arange(0, n, 2) for n in merl.RES), indexing="ij")
+
+    def block_rows(position):
+        rows = np.stack([position(i + a, j + b, k + c) for a in (0, 1) for b in (0, 1)
+                         for c in (0, 1)], axis=-1).reshape(-1, 8)
+        return rows - rows.min(axis=1, keepdims=True)
+
+    assert (block_rows(lookup.position) == np.arange(8)).all()
+    assert not (block_rows(lambda i, j, k: (i * 90 + j) * 180 + k) == np.arange(8)).all()
+    table = mi.load_dict(_spec()).table
+    dr.eval(table.buffer)
+    assert table.buffer.shape[0] * 2 == 8 * len(order) and \
+        np.from_dlpack(table.buffer).ctypes.data % 64 == 0
+
+
 def test05_a_transposed_lookup_is_caught(variant_llvm_ad_rgb, np_rng, monkeypatch):
-    monkeypatch.setattr(lookup, "_flat", lambda i, j, k: mi.UInt32((j * 90 + i) * 180 + k))
+    """The lookup's θh and θd crossed (the table stored right)."""
     bsdf = mi.load_dict(_spec())
+    offset = lookup.offset
+    monkeypatch.setattr(lookup, "offset", lambda n, axis: offset(n, (1, 0, 2)[axis]))
     with pytest.raises(AssertionError, match="against the float64 reference"):
         _assert_eval_matches_numpy(bsdf, merl.read(merl_file()), *_pairs(np_rng, 4000),
                                    "transposed")
