@@ -57,7 +57,7 @@ def coordinates(wi, wo) -> tuple:
 
 
 #: Per axis (θh, θd, φd): the rows between neighbouring blocks, and between neighbouring
-#: bins within a block.
+#: bins within a block (MERL's dimensions are even: every block is whole).
 STRIDES = (((RES[1] // 2) * (RES[2] // 2) * 8, 4), ((RES[2] // 2) * 8, 2), (8, 1))
 
 
@@ -98,8 +98,8 @@ def corners(wi, wo) -> list:
     # the rows' parts per axis (each computed once) and the weights
     parts = [[(offset(mi.UInt32(n), axis), w) for n, w in zip(axes[axis], (1.0 - f, f))]
              for axis, f in enumerate((fx, fy, fz))]
-    return [(oi + oj + ok, wi_ * wj * wk) for oi, wi_ in parts[0] for oj, wj in parts[1]
-            for ok, wk in parts[2]]
+    return [(oi + oj + ok, wx * wy * wz) for oi, wx in parts[0] for oj, wy in parts[1]
+            for ok, wz in parts[2]]
 
 
 def nearest(wi, wo):

@@ -67,9 +67,9 @@ def _stored(columns: np.ndarray) -> tuple[np.ndarray, float]:
 
 def _aligned(rows: np.ndarray, alignment: int = 64) -> np.ndarray:
     """``rows`` copied to memory that starts at a multiple of ``alignment`` bytes, so that each
-    block of the table (:func:`mi_brdfs.measured.lookup.position`) is whole cache lines. (drjit's
-    CPU backend uses a NumPy array's memory as it is, at NumPy's alignment of 16 bytes; where
-    it copies, its own allocations are aligned to 64.)"""
+    block of the table (:func:`mi_brdfs.measured.lookup.position`) is whole cache lines. (drjit
+    1.5's CPU backend was seen to use a large NumPy array's memory as it is, at NumPy's
+    alignment of 16 bytes; the allocations it makes itself start at multiples of 64.)"""
     raw = np.empty(rows.nbytes + alignment, np.uint8)
     start = -raw.ctypes.data % alignment
     out = raw[start:start + rows.nbytes].view(rows.dtype).reshape(rows.shape)
