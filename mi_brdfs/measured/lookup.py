@@ -1,10 +1,8 @@
 """
 Where a direction pair falls in MERL's table (:mod:`.merl`), in drjit, for every variant: the
 half and difference angles (Rusinkiewicz 1998) as MERL's reader defines them, and the bins and
-weights of a lookup, trilinear between bin centres or MERL's nearest bin. Indices are rows of
-the table as stored (:func:`position`): blocks of 2 × 2 × 2 bins, so that the eight corners of
-a lookup fall in 1.5³ ≈ 3.4 blocks on average, where MERL's order (φd fastest) spreads them over
-4.5 cache lines; a block of half-precision RGBA rows is one 64-byte line.
+weights of a lookup, trilinear between bin centres or MERL's nearest bin. Indices are flat,
+``(i·90 + j)·180 + k`` for bin (θh i, θd j, φd k), the order of ``values[c].ravel()``.
 
 The angles come from ``atan2`` of sines and cosines rather than ``acos``: near the specular
 peak (θh → 0) ``acos`` of a float32 cosine resolves no angle under about 3·10⁻⁴ rad, coarser
@@ -13,11 +11,8 @@ than MERL's first θh bin (2·10⁻⁴ rad).
 
 from __future__ import annotations
 
-import functools
-
 import drjit as dr
 import mitsuba as mi
-import numpy as np
 
 from .merl import RES
 
@@ -56,55 +51,29 @@ def coordinates(wi, wo) -> tuple:
     return x, y, z
 
 
-#: Per axis (θh, θd, φd): the rows between neighbouring blocks, and between neighbouring
-#: bins within a block (MERL's dimensions are even: every block is whole).
-STRIDES = (((RES[1] // 2) * (RES[2] // 2) * 8, 4), ((RES[2] // 2) * 8, 2), (8, 1))
-
-
-def offset(n, axis: int):
-    """The part of :func:`position` that bin index ``n`` along ``axis`` contributes."""
-    block, inner = STRIDES[axis]
-    return (n >> 1) * block + (n & 1) * inner
-
-
-def position(i, j, k):
-    """The row of bin (θh i, θd j, φd k) in the table as stored: block ((i/2·45 + j/2)·90 +
-    k/2) (integer halves), bin (i mod 2, j mod 2, k mod 2) in it, φd fastest; the sum of each
-    axis's :func:`offset`. Integer NumPy arrays or drjit integers."""
-    return offset(i, 0) + offset(j, 1) + offset(k, 2)
-
-
-@functools.lru_cache(maxsize=1)
-def stored_order() -> np.ndarray:
-    """For each row of the table as stored, the bin in MERL's flat order ((i·90 + j)·180 + k,
-    that of ``values[c].ravel()``) it holds."""
-    i, j, k = np.meshgrid(*(np.arange(n) for n in RES), indexing="ij")
-    order = np.empty(np.prod(RES), np.int64)
-    order[position(i, j, k).ravel()] = np.arange(order.size)
-    return order
+def _flat(i, j, k):
+    return mi.UInt32((i * RES[1] + j) * RES[2] + k)
 
 
 def corners(wi, wo) -> list:
-    """The eight (row, weight) pairs of trilinear interpolation between bin centres: clamped
-    to the first and last bin in θh and θd, periodic in φd."""
+    """The eight (flat index, weight) pairs of trilinear interpolation between bin centres:
+    clamped to the first and last bin in θh and θd, periodic in φd."""
     x, y, z = coordinates(wi, wo)
     x0, y0, z0 = dr.floor(x), dr.floor(y), dr.floor(z)
     fx, fy, fz = x - x0, y - y0, z - z0
     x0, y0, z0 = mi.Int32(x0), mi.Int32(y0), mi.Int32(z0)
-    ks = [z0, z0 + 1]
-    ks = [dr.select(k < 0, k + RES[2], dr.select(k >= RES[2], k - RES[2], k)) for k in ks]
-    axes = [[dr.clip(x0, 0, RES[0] - 1), dr.clip(x0 + 1, 0, RES[0] - 1)],
-            [dr.clip(y0, 0, RES[1] - 1), dr.clip(y0 + 1, 0, RES[1] - 1)], ks]
-    # the rows' parts per axis (each computed once) and the weights
-    parts = [[(offset(mi.UInt32(n), axis), w) for n, w in zip(axes[axis], (1.0 - f, f))]
-             for axis, f in enumerate((fx, fy, fz))]
-    return [(oi + oj + ok, wx * wy * wz) for oi, wx in parts[0] for oj, wy in parts[1]
-            for ok, wz in parts[2]]
+    xs = [(dr.clip(x0 + d, 0, RES[0] - 1), w) for d, w in ((0, 1.0 - fx), (1, fx))]
+    ys = [(dr.clip(y0 + d, 0, RES[1] - 1), w) for d, w in ((0, 1.0 - fy), (1, fy))]
+    zs = []
+    for d, w in ((0, 1.0 - fz), (1, fz)):
+        k = z0 + d
+        zs.append((dr.select(k < 0, k + RES[2], dr.select(k >= RES[2], k - RES[2], k)), w))
+    return [(_flat(i, j, k), wx * wy * wz) for i, wx in xs for j, wy in ys for k, wz in zs]
 
 
 def nearest(wi, wo):
-    """The row of MERL's own lookup: the bin the angles fall in (the floor of the coordinates
-    shifted by ½), clamped."""
+    """The flat index of MERL's own lookup: the bin the angles fall in (the floor of the
+    coordinates shifted by ½), clamped."""
     x, y, z = coordinates(wi, wo)
     i, j, k = (dr.clip(mi.Int32(dr.floor(c + 0.5)), 0, n - 1) for c, n in zip((x, y, z), RES))
-    return position(mi.UInt32(i), mi.UInt32(j), mi.UInt32(k))
+    return _flat(i, j, k)

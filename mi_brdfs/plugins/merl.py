@@ -66,10 +66,11 @@ def _stored(columns: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def _aligned(rows: np.ndarray, alignment: int = 64) -> np.ndarray:
-    """``rows`` copied to memory that starts at a multiple of ``alignment`` bytes, so that each
-    block of the table (:func:`mi_brdfs.measured.lookup.position`) is whole cache lines. (drjit
-    1.5's CPU backend was seen to use a large NumPy array's memory as it is, at NumPy's
-    alignment of 16 bytes; the allocations it makes itself start at multiples of 64.)"""
+    """``rows`` copied to memory that starts on a cache line (a multiple of ``alignment``
+    bytes). drjit 1.5's CPU backend was seen to use a large NumPy array's memory as it is, at
+    NumPy's alignment of 16 bytes, where the allocations it makes itself start at multiples of
+    64; the table 16 bytes past a line renders much slower (``validation/merl_layout.py``
+    times both)."""
     raw = np.empty(rows.nbytes + alignment, np.uint8)
     start = -raw.ctypes.data % alignment
     out = raw[start:start + rows.nbytes].view(rows.dtype).reshape(rows.shape)
@@ -79,14 +80,14 @@ def _aligned(rows: np.ndarray, alignment: int = 64) -> np.ndarray:
 
 class Table:
     """One measured file in this variant: the bins' values (:func:`_columns`, stored as
-    :func:`_stored`, in the order of :func:`mi_brdfs.measured.lookup.position`) and the
-    sampler of their density (:class:`mi_brdfs.measured.warp.Sampler`)."""
+    :func:`_stored`, on a cache line: :func:`_aligned`) and the sampler of their density
+    (:class:`mi_brdfs.measured.warp.Sampler`)."""
 
     def __init__(self, measured: data.Measured):
         columns = _columns(measured.rgb)
         self.channels = columns.shape[1]
         rows, self.unit = _stored(columns)
-        rows = _aligned(rows[lookup.stored_order()])
+        rows = _aligned(rows)
         stored = dr.float16_array_t if rows.dtype == np.float16 else (lambda kind: kind)
         self.row = stored({1: mi.Float, 3: mi.Vector4f, 4: mi.Vector4f}[self.channels])
         # scalar variants call the methods with Python numbers: the rows stay in NumPy
@@ -182,8 +183,8 @@ class Merl(mi.BSDF):
     Polarized variants get a depolarizer: the data describe no polarization. RGB and
     monochrome variants store the bins in half precision (relative rounding ≤ 2⁻¹¹, far under
     the interpolation error; a power-of-two unit keeps the largest in range): the lookup is
-    bound by memory. Spectral ones keep their coefficients in float32. The bins are stored in
-    blocks of 2 × 2 × 2, so that the 8 of an interpolation share cache lines.
+    bound by memory, and the table starts on a cache line. Spectral ones keep their
+    coefficients in float32.
 
     **Loading.** A file is read once per process while it is unchanged (about 35 MB: a few
     tenths of a second); every instance that names it shares its tables. A missing, short,

@@ -49,3 +49,20 @@ def test03_profile_kernels_quick():
     for row in rows:
         kernels, fdiv = float(row[-6]), int(row[-1])
         assert kernels > 0 and fdiv > 0, p.stdout
+
+
+def test04_merl_layout_quick():
+    """validation/merl_layout.py --quick: a row per layout, each having evaluated the file's
+    values before it was timed, with the row of bin (0, 1, 0) and the table's offset that
+    the layout asks for."""
+    from helpers import merl_file
+
+    p = subprocess.run([sys.executable, str(ROOT / "validation" / "merl_layout.py"), "--quick",
+                        "--file", str(merl_file())], capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0, p.stderr
+    rows = {line.split(" | ")[0].lstrip("| "): line.rstrip(" |").split(" | ")[-2:]
+            for line in p.stdout.splitlines() if " ns |" in line}
+    assert rows == {"MERL's order, 16 bytes past a line": ["180", "16 bytes"],
+                    "MERL's order on lines (the plugin's)": ["180", "0 bytes"],
+                    "blocks of 2 × 2 × 2 on lines": ["2", "0 bytes"]}, p.stdout
