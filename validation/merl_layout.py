@@ -36,26 +36,18 @@ from pathlib import Path
 
 import numpy as np
 
+from mi_brdfs.measured.merl import RES
+
 LAYOUTS = ("MERL's order, 16 bytes past a line", "MERL's order on lines (the plugin's)",
            "blocks of 2 × 2 × 2 on lines")
 TARGET = 1.3
 
 
-def _block_row(i, j, k, res=(90, 90, 180)):
+def _block_row(i, j, k, res=RES):
     """The row of bin (i, j, k) in blocks of 2 × 2 × 2 bins, φd fastest (NumPy or drjit
     integers)."""
     block = ((i >> 1) * (res[1] // 2) + (j >> 1)) * (res[2] // 2) + (k >> 1)
     return block * 8 + (i & 1) * 4 + (j & 1) * 2 + (k & 1)
-
-
-def _copy_at(rows, offset, alignment=64):
-    """``rows`` copied to memory that starts ``offset`` bytes past a multiple of
-    ``alignment``."""
-    raw = np.empty(rows.nbytes + alignment, np.uint8)
-    start = (offset - raw.ctypes.data) % alignment
-    out = raw[start:start + rows.nbytes].view(rows.dtype).reshape(rows.shape)
-    out[...] = rows
-    return out
 
 
 def _use_layout(layout: str) -> None:
@@ -65,13 +57,14 @@ def _use_layout(layout: str) -> None:
     from mi_brdfs.measured import lookup
     from mi_brdfs.plugins import merl as plugin
 
+    aligned = plugin._aligned
     if layout == LAYOUTS[0]:
-        plugin._aligned = lambda rows, alignment=64: _copy_at(rows, 16, alignment)
+        plugin._aligned = lambda rows: aligned(rows, offset=16)
     elif layout == LAYOUTS[2]:
-        i, j, k = np.meshgrid(*(np.arange(n) for n in lookup.RES), indexing="ij")
+        i, j, k = np.meshgrid(*(np.arange(n) for n in RES), indexing="ij")
         order = np.empty(i.size, np.int64)
         order[_block_row(i, j, k).ravel()] = np.arange(i.size)  # the bin each row holds
-        plugin._aligned = lambda rows, alignment=64: _copy_at(rows[order], 0, alignment)
+        plugin._aligned = lambda rows: aligned(rows[order])
         lookup._flat = lambda i, j, k: mi.UInt32(_block_row(mi.UInt32(i), mi.UInt32(j),
                                                             mi.UInt32(k)))
 
@@ -83,25 +76,14 @@ def worker(layout: str, filename: str, res: int, spp: int, repeats: int) -> dict
     mi_brdfs.use_variant("llvm_ad_rgb")
     import mitsuba as mi
 
-    from mi_brdfs.benchmark import error_time
-    from mi_brdfs.benchmark.measured import COST_SOURCE
-    from mi_brdfs.scenes import load_scene
-    from mi_brdfs.timing import interleaved, median_ratio
-
-    _use_layout(layout)
-    ids = error_time.SCENES["showcase"]
-    scenes = {k: load_scene("showcase", {"res": str(res)}, bsdfs={i: b for i in ids})
-              for k, b in (("merl", f"merl filename={filename}"), ("cooktorrance", COST_SOURCE))}
-    for scene in scenes.values():
-        mi.render(scene, spp=spp)  # the JIT compilation, apart
-    times = interleaved({k: (lambda s=s: mi.render(s, spp=spp)) for k, s in scenes.items()},
-                        repeats=repeats, warmup=0)
-    per = {k: statistics.median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
-    bsdf = mi.load_dict({"type": "merl", "filename": filename})
-    _check(bsdf, filename, layout)
+    from mi_brdfs.benchmark.measured import render_cost
     from mi_brdfs.measured import lookup
 
-    return {"ratio": median_ratio(times, "merl", "cooktorrance"), "ns": per,
+    _use_layout(layout)
+    ratio, per = render_cost(f"merl filename={filename}", res, spp, repeats)
+    bsdf = mi.load_dict({"type": "merl", "filename": filename})
+    _check(bsdf, filename, layout)
+    return {"ratio": ratio, "ns": per,
             "start": int(np.from_dlpack(bsdf.table.buffer).ctypes.data % 64),  # past a line
             "row": int(lookup._flat(0, 1, 0)[0])}  # 180 in MERL's order, 2 in blocks
 

@@ -115,23 +115,29 @@ def _efficiency(ctx: Context, s: Section, label: str, merl, target) -> tuple:
             f"{eff['sample()'] / eff['cosine']:.3g}×", *cells)
 
 
-def _cost(ctx: Context, s: Section, merl) -> tuple:
-    """merl against the cooktorrance it tabulates, every sphere of the showcase, render
-    times."""
-    res, spp = ctx.n(128, 32), ctx.n(32, 4)
+def render_cost(merl, res: int, spp: int, repeats: int) -> tuple[float, dict]:
+    """(ratio, ns per sample): ``merl`` (any BSDF form) against :data:`COST_SOURCE` on every
+    sphere of the showcase, the median of per-repeat ratios of interleaved renders after a
+    first render of each (the JIT compilation, apart), and each one's median time per
+    sample."""
     ids = error_time.SCENES["showcase"]
     scenes = {k: load_scene("showcase", {"res": str(res)}, bsdfs={i: b for i in ids})
               for k, b in (("merl", merl), ("cooktorrance", COST_SOURCE))}
     for sc in scenes.values():
-        mi.render(sc, spp=spp)  # the JIT compilation, apart
+        mi.render(sc, spp=spp)
     times = interleaved({k: (lambda sc=sc: mi.render(sc, spp=spp)) for k, sc in scenes.items()},
-                        repeats=ctx.n(15, 2), warmup=0)
-    ratio = median_ratio(times, "merl", "cooktorrance")
+                        repeats=repeats, warmup=0)
+    per = {k: median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
+    return median_ratio(times, "merl", "cooktorrance"), per
+
+
+def _cost(ctx: Context, s: Section, merl) -> tuple:
+    """merl against the cooktorrance it tabulates (:func:`render_cost`), the section's row."""
+    ratio, per = render_cost(merl, ctx.n(128, 32), ctx.n(32, 4), ctx.n(15, 2))
     s.values["merl vs cooktorrance, render time"] = f"{ratio:.3f}×"
     s.rows.append(Row("merl vs cooktorrance (Smith, Au, α = 0.2, tabulated)",
                       f"{ctx.variant} render time ratio", f"{ratio:.3f}×", f"≤ {TARGET_COST}×",
                       ratio <= TARGET_COST))
-    per = {k: median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
     return f"{per['merl']:.1f} ns", f"{per['cooktorrance']:.1f} ns", f"{ratio:.3f}×"
 
 

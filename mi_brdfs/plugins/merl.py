@@ -65,14 +65,14 @@ def _stored(columns: np.ndarray) -> tuple[np.ndarray, float]:
     return rows, unit
 
 
-def _aligned(rows: np.ndarray, alignment: int = 64) -> np.ndarray:
+def _aligned(rows: np.ndarray, alignment: int = 64, offset: int = 0) -> np.ndarray:
     """``rows`` copied to memory that starts on a cache line (a multiple of ``alignment``
-    bytes). drjit 1.5's CPU backend was seen to use a large NumPy array's memory as it is, at
-    NumPy's alignment of 16 bytes, where the allocations it makes itself start at multiples of
-    64; the table 16 bytes past a line renders much slower (``validation/merl_layout.py``
-    times both)."""
+    bytes; ``offset`` bytes past one, for the comparison). drjit 1.5's CPU backend was seen to
+    use a large NumPy array's memory as it is, at NumPy's alignment of 16 bytes, where the
+    allocations it makes itself start at multiples of 64; the table 16 bytes past a line
+    renders much slower (``validation/merl_layout.py`` times both)."""
     raw = np.empty(rows.nbytes + alignment, np.uint8)
-    start = -raw.ctypes.data % alignment
+    start = (offset - raw.ctypes.data) % alignment
     out = raw[start:start + rows.nbytes].view(rows.dtype).reshape(rows.shape)
     out[...] = rows
     return out
