@@ -2,7 +2,8 @@
 #   make render   renders the showcase scene to out/showcase.exr + out/showcase.png
 #   make test     runs the test suite
 # Both are idempotent: the set-up (system libraries, .venv) runs only when something is missing
-# or pyproject.toml changed.
+# or pyproject.toml changed. The targets that regenerate files (render, bench, validate, audit,
+# figures) pass --force: mi-brdfs replaces no file it was not told to.
 
 PYTHON ?= python3
 VENV   := .venv
@@ -35,7 +36,7 @@ setup: $(STAMP)
 
 render: $(STAMP)
 	@mkdir -p $(OUT)
-	$(VENV)/bin/mi-brdfs render showcase -o $(OUT)/showcase.exr --spp $(SPP) -D res=$(RES)
+	$(VENV)/bin/mi-brdfs render showcase -o $(OUT)/showcase.exr --spp $(SPP) -D res=$(RES) --force
 
 # pytest exits 5 when it collected no test: that is a broken suite, not a pass. Two worker
 # processes (pytest-xdist), one per core of a 2-core machine; PYTEST_ARGS="-n 8" uses more.
@@ -45,21 +46,21 @@ test: $(STAMP)
 	exit $$rc
 
 bench: $(STAMP)
-	$(VENV)/bin/mi-brdfs bench --out validation $(QUOTING)
+	$(VENV)/bin/mi-brdfs bench --out validation --force $(QUOTING)
 
 # The validation campaign: validation/REPORT.md and validation/figures/ (about 20 min on 2 cores)
 validate: $(STAMP)
-	$(VENV)/bin/mi-brdfs validate --out validation $(QUOTING)
+	$(VENV)/bin/mi-brdfs validate --out validation --force $(QUOTING)
 
 # The audit of every BSDF Mitsuba ships: validation/MITSUBA_AUDIT.md and validation/audit/
 # (about 15 min on 2 cores; resumable: results are cached in validation/audit/.cache)
 audit: $(STAMP)
-	$(VENV)/bin/mi-brdfs audit --out validation
+	$(VENV)/bin/mi-brdfs audit --out validation --force
 
 # The README's figures
 figures: $(STAMP)
 	@mkdir -p $(OUT)
-	$(VENV)/bin/mi-brdfs render showcase -o $(OUT)/showcase-hq.exr --spp 256 -D res=320 -q
+	$(VENV)/bin/mi-brdfs render showcase -o $(OUT)/showcase-hq.exr --spp 256 -D res=320 -q --force
 	cp $(OUT)/showcase-hq.png docs/showcase.png
 
 # The plugin reference, docs/plugins/*.md, generated from the plugins' docstrings

@@ -43,6 +43,14 @@ def parse(spec):
 
     if isinstance(spec, mi.BSDF):
         return spec
+    if isinstance(spec, mi.Object):  # the mi.BSDF of another variant, or no BSDF at all
+        kind = spec.class_name() if type(spec).__module__ == "mitsuba" else type(spec).__name__
+        if spec.variant_name() != mi.variant():
+            raise MiBrdfsError(f"a {kind} loaded in {spec.variant_name()} cannot be used in "
+                               f"{mi.variant()}, the variant this call works in: give it as a "
+                               f"dict, an XML fragment or 'type key=value ...', or load it in "
+                               f"{mi.variant()}")
+        raise MiBrdfsError(f"a {kind} is not a BSDF")
     if isinstance(spec, dict):
         if not isinstance(spec.get("type"), str):
             raise MiBrdfsError(f"a BSDF dict needs a 'type' (e.g. 'diffuse'), got {spec}")

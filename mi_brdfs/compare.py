@@ -194,20 +194,27 @@ def figure(result: Comparison, path, title: str | None = None) -> str:
     return save_figure(fig, path)
 
 
+def exr_paths(out: str | Path) -> dict:
+    """{'A', 'B', 'diff': path}: the EXRs :func:`write_outputs` writes beside the figure
+    ``out`` (``compare.png``: ``compare-A.exr``, ``compare-B.exr``, ``compare-diff.exr``)."""
+    out = Path(out)
+    return {suffix: out.with_name(f"{out.stem}-{suffix}.exr") for suffix in ("A", "B", "diff")}
+
+
 def write_outputs(result: Comparison, out: str | Path) -> list[str]:
-    """The figure ``out`` (PNG) plus A, B and B − A as float32 EXRs beside it."""
+    """The figure ``out`` (PNG) plus A, B and B − A as float32 EXRs beside it
+    (:func:`exr_paths`), each written atomically."""
     from ._version import __version__
     from .imageio import write_exr
 
-    out = Path(out)
     written = [figure(result, out)]
     meta = {"mi_brdfs.version": __version__, "compare.a": result.labels[0],
             "compare.b": result.labels[1], "render.spp": result.spp, "render.seed": result.seed,
             "render.variant": result.variant, "compare.rmse": f"{result.ab.rmse:.6g}",
             "compare.noise_rmse": f"{result.noise.rmse:.6g}"}
-    for suffix, image in (("A", result.a), ("B", result.b), ("diff", result.b - result.a)):
-        path = out.with_name(f"{out.stem}-{suffix}.exr")
-        write_exr(path, image, meta)
+    images = {"A": result.a, "B": result.b, "diff": result.b - result.a}
+    for suffix, path in exr_paths(out).items():
+        write_exr(path, images[suffix], meta)
         written.append(str(path))
     return written
 
@@ -224,5 +231,5 @@ def parse_swaps(items) -> dict:
     return swaps
 
 
-__all__ = ["compare", "figure", "write_outputs", "metrics", "rmse", "rel_mse", "flip_map",
-           "Comparison", "Metrics", "parse_swaps"]
+__all__ = ["compare", "figure", "write_outputs", "exr_paths", "metrics", "rmse", "rel_mse",
+           "flip_map", "Comparison", "Metrics", "parse_swaps"]

@@ -50,7 +50,40 @@ def check_writable(path: str | os.PathLike) -> Path:
     return path
 
 
-def output_folder(path, name: str, filename: str) -> Path:
+def planned_outputs(command: str, named=(), unnamed=(), force: bool = False,
+                    folder: tuple | None = None) -> list[Path]:
+    """
+    Every file a command is about to write, checked before any work: the one place that decides
+    what may be replaced. A file the user named (``named``: paths given on the command line,
+    such as ``-o OUT.exr``) is replaced; any other (``unnamed``: (path, what it is or "",
+    advice) of a default output, a file written beside a named one, a report's file in its
+    folder) that exists already is refused in one line, ``COMMAND: PATH (WHAT) exists; ADVICE,
+    or pass --force to replace it``, unless ``force``. ``folder``: (path, how errors name it)
+    of the folder the unnamed files go in, created (with its parents) once nothing is refused.
+    Every file must be writable (:func:`check_writable`), but one in a subfolder not made yet;
+    the writers replace each one atomically (:func:`atomic_path`).
+
+    Returns → list[Path]: the absolute paths, ``named`` first, in the order given.
+    """
+    for path, what, advice in unnamed:
+        path = Path(path).expanduser()
+        if not force and (path.is_file() or path.is_symlink()):
+            raise MiBrdfsError(f"{command}: {_shown(path)}{f' ({what})' if what else ''} "
+                               f"exists; {advice}, or pass --force to replace it")
+    if folder is not None:
+        output_folder(*folder)
+    return [check_writable(p) for p in named] + [  # (a subfolder: its writer makes it)
+        check_writable(p) if Path(p).expanduser().absolute().parent.is_dir()
+        else Path(p).expanduser().absolute() for p, _, _ in unnamed]
+
+
+def _shown(path: Path) -> str:
+    """``path`` as the user would type it: ``./NAME`` inside the current folder."""
+    path, here = path.absolute(), Path.cwd()
+    return f"./{path.relative_to(here).as_posix()}" if path.is_relative_to(here) else str(path)
+
+
+def output_folder(path, name: str, filename: str | None = None) -> Path:
     """
     The folder ``path`` (created with its parents), checked writable for ``filename`` before
     any work; one-line errors name it as ``name`` (e.g. ``--out DIR``).
@@ -64,7 +97,7 @@ def output_folder(path, name: str, filename: str) -> Path:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise MiBrdfsError(f"{name}: cannot create the folder: {e.strerror or e}") from None
-    check_writable(out / filename)
+    check_writable(out / (filename or ".probe"))
     return out
 
 

@@ -84,10 +84,27 @@ def register() -> list[str]:
             if name in builtins:  # would silently replace Mitsuba's plugin for this variant
                 raise RuntimeError(f"mi_brdfs: plugin id '{name}' shadows a Mitsuba built-in")
             cls = getattr(_load_for_variant(module), class_name)
-            mi.register_bsdf(name, cls)
+            mi.register_bsdf(name, _constructor(name, cls))
             classes[name] = cls
         _classes[variant] = classes
     return sorted(_classes[variant])
+
+
+def _constructor(name: str, cls: type):
+    """
+    What Mitsuba calls to make plugin ``name``: the class, then the check that it read every
+    property given (:func:`mi_brdfs.plugins.properties.check_all_read`), so that a misspelt
+    parameter is one line naming the plugin, the parameter and the closest documented names,
+    before Mitsuba's own check words it as an unreferenced property of an "unknown plugin".
+    """
+    from .plugins.properties import check_all_read
+
+    def construct(props):
+        bsdf = cls(props)
+        check_all_read(props, name, cls.__doc__ or "")
+        return bsdf
+
+    return construct
 
 
 def _load_for_variant(name: str):
@@ -139,6 +156,43 @@ def usable_variants() -> list[str]:
     ok = {"scalar_": True, "llvm_": llvm_usable(),
           "cuda_": bool(dr.has_backend(dr.JitBackend.CUDA))}
     return [v for v in mi.variants() if any(v.startswith(p) and u for p, u in ok.items())]
+
+
+def _rgb(ad: bool) -> bool:
+    """Whether the current variant is a plain RGB JIT one (with AD where ``ad``)."""
+    return mi.variant() is not None and mi.is_rgb and not mi.is_polarized \
+        and bool(dr.is_jit_v(mi.Float)) and (not ad or bool(dr.is_diff_v(mi.Float)))
+
+
+def use_rgb_jit(who: str, variant: str | None = None, ad: bool = False) -> str:
+    """
+    Set the variant of an entry point that works in an RGB JIT variant (``measure``: MERL's
+    format holds RGB; ``fit``: Adam needs automatic differentiation, ``ad``) and return it:
+    ``variant`` where given, else the current variant where it is such a variant, else
+    ``llvm_ad_rgb`` (``cuda_ad_rgb`` from another ``cuda_*`` variant). The entry point hands
+    the caller's variant back on return (:func:`mi_brdfs.variants.keeps_variant`).
+
+    Raises MiBrdfsError (one line naming ``who``) for a ``variant`` that is no such variant,
+    or where the one it would switch to cannot run here (no working libLLVM).
+    """
+    kind = "an RGB variant with automatic differentiation" if ad else "an RGB JIT variant"
+    if variant is None and _rgb(ad):
+        return mi.variant()
+    if variant is None:
+        current = mi.variant() or ""
+        variant = "cuda_ad_rgb" if current.startswith("cuda_") else "llvm_ad_rgb"
+        try:
+            return use_variant(variant, fallback=False)
+        except MiBrdfsError as e:
+            raise MiBrdfsError(f"{who} needs {kind} (llvm_ad_rgb or cuda_ad_rgb), and switching "
+                               f"from {current or 'no variant'} failed: {e}") from None
+    use_variant(variant, fallback=False)
+    if not _rgb(ad):
+        lacks = "no AD" if ad and not dr.is_diff_v(mi.Float) else \
+            "no JIT" if not dr.is_jit_v(mi.Float) else "no plain RGB"
+        raise MiBrdfsError(f"{who} needs {kind} (llvm_ad_rgb or cuda_ad_rgb); {variant} has "
+                           f"{lacks}")
+    return variant
 
 
 def use_variant(variant: str | None = None, fallback: bool = True) -> str:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+import struct
 from pathlib import Path
 
 from .errors import MiBrdfsError, mitsuba_error_line
@@ -31,6 +32,7 @@ def scene_path(name_or_path: str | os.PathLike) -> Path:
     """
     path = Path(name_or_path).expanduser()
     if path.is_file():
+        _not_measured_data(path)
         return path.resolve()
     bundled = scenes_dir() / (path.name if path.suffix == ".xml" else f"{path.name}.xml")
     if path.parent == Path(".") and bundled.is_file():
@@ -39,6 +41,20 @@ def scene_path(name_or_path: str | os.PathLike) -> Path:
         raise MiBrdfsError(f"scene {path} is a directory, not an XML file")
     raise MiBrdfsError(f"scene file {path} does not exist (bundled scenes: "
                        f"{', '.join(sorted(p.stem for p in scenes_dir().glob('*.xml')))})")
+
+
+def _not_measured_data(path: Path) -> None:
+    """A MERL measured BRDF (a ``.binary`` file, or one that starts with MERL's dimensions 90,
+    90, 180) where a scene is taken is one line saying it is a BSDF and how to use it."""
+    with open(path, "rb") as f:
+        head = f.read(12)
+    if path.suffix.lower() == ".binary" or head == struct.pack("<3i", 90, 90, 180):
+        raise MiBrdfsError(
+            f"{path.name} is a MERL measured BRDF, not a scene: use it as a BSDF, merl "
+            f"filename={path} (e.g. mi-brdfs check merl filename={path}; mi-brdfs compare "
+            f"material --swap \"material=merl filename={path}\" renders it on a sphere; in "
+            f"a scene, <bsdf type=\"merl\"><string name=\"filename\" value=\"{path}\"/>"
+            f"</bsdf>)")
 
 
 def parse_defines(items: list[str] | None) -> dict[str, str]:

@@ -211,3 +211,24 @@ def test10_an_xml_bsdf_is_named_by_its_type_and_parameters(variant_scalar_rgb):
     assert bsdfspec.describe(xml) == \
         "roughconductor(alpha=0.3, material=Au, specular_reflectance=bitmap)"
     assert bsdfspec.describe('<bsdf type="diffuse"/>') == "diffuse"
+
+
+def test11_an_object_of_another_variant_or_no_bsdf_is_one_line(variant_scalar_rgb):
+    """A BSDF loaded in scalar_rgb handed to a call that works in llvm_ad_rgb (fit, measure
+    switch to it) was refused as "cannot make a BSDF from" its multi-line repr: one line now,
+    naming both variants; a loaded texture is no BSDF, in one line too."""
+    from conftest import LLVM_OK
+
+    if not LLVM_OK:
+        pytest.skip("no working libLLVM")
+    texture = mi.load_dict({"type": "checkerboard"})
+    with pytest.raises(MiBrdfsError, match="^a Checkerboard is not a BSDF$"):
+        bsdfspec.parse(texture)
+    loaded = [mi.load_dict({"type": "diffuse"}), mi.load_dict({"type": "lambert"})]
+    mi_brdfs.use_variant("llvm_ad_rgb")
+    for bsdf, name in zip(loaded, ("SmoothDiffuse", "Lambert")):
+        with pytest.raises(MiBrdfsError) as info:
+            bsdfspec.load_bsdf(bsdf)
+        text = str(info.value)
+        assert text.startswith(f"a {name} loaded in scalar_rgb cannot be used in llvm_ad_rgb")
+        assert "\n" not in text, text

@@ -220,9 +220,14 @@ def test07_bad_input_one_line(variant_llvm_ad_rgb, kwargs, message):
     assert message in str(info.value) and "\n" not in str(info.value)
 
 
-def test08_needs_an_ad_variant(variant_scalar_rgb):
+def test08_needs_an_ad_variant(variant_llvm_ad_rgb):
+    """A variant asked for without AD is refused (from scalar_rgb without one asked for, fit
+    switches: test_variant01 below)."""
+    import mitsuba as mi
+
     with pytest.raises(MiBrdfsError, match="needs an RGB variant with automatic differentiation"):
-        fit("lambert", "lambert")
+        fit("lambert", "lambert", variant="scalar_rgb")
+    assert mi.variant() == "llvm_ad_rgb"
 
 
 def _main(args, tmp_path, monkeypatch, capsys):
@@ -369,6 +374,44 @@ def test15_no_pair_above_the_horizon(variant_llvm_ad_rgb):
         fit("lambert", "lambert", pairs=1, seed=5, steps=1, thetas_deg=(0.0,))
 
 
+def test15b_a_file_without_measured_bins(variant_llvm_ad_rgb, tmp_path):
+    """A MERL file whose every bin is unmeasured (negative) leaves no pair to fit whatever the
+    pairs: one line saying so, not the advice to give more pairs (it said "e.g. 4096" to a fit
+    given 16384)."""
+    import struct
+    import warnings
+
+    from mi_brdfs.errors import MiBrdfsWarning
+
+    path = tmp_path / "unmeasured.binary"
+    with open(path, "wb") as f:
+        f.write(struct.pack("<3i", 90, 90, 180))
+        np.full(3 * 90 * 90 * 180, -1.0).tofile(f)
+    with pytest.raises(MiBrdfsError) as info, warnings.catch_warnings():
+        warnings.simplefilter("ignore", MiBrdfsWarning)  # (the merl plugin's: all unmeasured)
+        fit(str(path), "ward", pairs=16384, steps=1)
+    assert f"fit: {path} has no measured bin above the horizon: nothing to fit, with any " \
+        "number of pairs" in str(info.value) and "more pairs" not in str(info.value)
+
+
+def test15c_cli_compare_published_names_a_known_material(variant_llvm_ad_rgb, tmp_path,
+                                                          monkeypatch):
+    """--compare-published names one of the published fits' materials (or the TARGET file's
+    name does), checked before any fit runs, with the close names: not a table of dashes after
+    the fits."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
+    cli_one_line_error(["fit", "gold.binary", "--models", "ward", "--compare-published"],
+                       "--compare-published: the TARGET file's name, gold, is not among the 86 "
+                       "materials of Ngan et al.'s published fits; name the material: "
+                       "--compare-published MATERIAL")
+    cli_one_line_error(["fit", "gold.binary", "--models", "ward", "--compare-published",
+                        "gold-metalic-paint"],
+                       "--compare-published gold-metalic-paint: not among the 86 materials of "
+                       "Ngan et al.'s published fits (did you mean gold-metallic-paint")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test16_numbered_and_signed_parameters(variant_llvm_ad_rgb):
     """
     Without a fit: lafortune's numbered lobe parameters (``mi.traverse`` keys ``cx_1``,
@@ -430,3 +473,28 @@ def test14_a_perfect_mirrors_index_is_fitted(variant_llvm_ad_rgb):
                  pairs=4096, steps=200)
     assert result.residual < 1e-3 and not result.flags, (result.residual, result.flags)
     assert result.spec["alpha"] == pytest.approx(0.1, rel=1e-2)
+
+
+# -------------------------------------------------------------------------------------------------
+# The variant a fit runs in, from the Python API (the caller's is handed back)
+# -------------------------------------------------------------------------------------------------
+
+
+def test_variant01_fit_from_scalar_rgb_switches_and_hands_it_back(variant_scalar_rgb):
+    """As the docs say: fit() from scalar_rgb (no AD) fits in llvm_ad_rgb and sets scalar_rgb
+    again, where it once refused; a target loaded in scalar_rgb, which cannot be evaluated in
+    llvm_ad_rgb, is one line naming both variants, and the caller's variant is kept then too."""
+    import mitsuba as mi
+    from conftest import LLVM_OK
+
+    if not LLVM_OK:
+        pytest.skip("no working libLLVM")
+    tiny = dict(pairs=256, steps=2, thetas_deg=(0.0,), starts="given")
+    result = fit("lambert reflectance=0.3", "lambert", **tiny)
+    assert result.variant == "llvm_ad_rgb" and mi.variant() == "scalar_rgb"
+    loaded = mi.load_dict({"type": "diffuse"})
+    with pytest.raises(MiBrdfsError) as info:
+        fit(loaded, "lambert", **tiny)
+    assert "a SmoothDiffuse loaded in scalar_rgb cannot be used in llvm_ad_rgb" in \
+        str(info.value) and "\n" not in str(info.value)
+    assert mi.variant() == "scalar_rgb"

@@ -742,3 +742,23 @@ def test22_choice_and_agreement_on_synthetic_candidates():
     measured = SimpleNamespace(speedup=1.005, speedup_se=0.029)
     assert "DO NOT agree" in agreement({"speedup": 1.093, "speedup_se": 0.030}, measured, 2.0)
     assert "agree within" in agreement({"speedup": 1.02, "speedup_se": 0.030}, measured, 2.0)
+
+
+def test23_every_plugin_of_ours_gets_candidates_or_its_own_reason(variant_llvm_ad_rgb):
+    """Every plugin of the registry is ours to simplify: merl and he once read "is not a plugin
+    of mi_brdfs" (a list typed by hand); now each gets candidates, or, where none applies in
+    any configuration (measured data, He et al.'s model), says so and how to find a cheaper
+    model. A plugin of no package still gets that line, listing the registry's plugins."""
+    scene = "".join(f'<bsdf type="{name}" id="{name}"/>' for name in mi_brdfs.PLUGINS)
+    scene = f'<scene version="3.0.0">{scene}<bsdf type="nosuch" id="nosuch"/></scene>'
+    materials, defaults = scene_bsdfs(scene.encode())
+    plans = simplify_pipeline._plans(materials, defaults, None, [])
+    reasons = {mat.label: reason for mat, cands, reason in plans if not cands}
+    for name in mi_brdfs.PLUGINS:
+        assert "not a plugin of mi_brdfs" not in reasons.get(name, ""), (name, reasons[name])
+    for name in ("merl", "he"):
+        assert reasons[name].startswith(f"simplify has no candidates for {name} ("), reasons
+        assert "mi-brdfs fit TARGET --models all" in reasons[name], reasons
+    assert reasons["nosuch"] == (f"nosuch is not a plugin of mi_brdfs "
+                                 f"({', '.join(mi_brdfs.PLUGINS)}): simplify has no candidates "
+                                 f"for it"), reasons

@@ -1,22 +1,23 @@
 """
 Running the audit: every :class:`~mi_brdfs.audit.grid.Case` through the battery of checks and
-Mitsuba's own χ² harness, in worker processes, each case's results cached on disk so that an
-interrupted audit resumes where it stopped.
+Mitsuba's own χ² harness, in worker processes (:func:`mi_brdfs.runner.run`: Ctrl-C or SIGTERM
+stops them at once), each case's results cached on disk as it finishes so that an interrupted
+audit resumes where it stopped.
 """
 
 from __future__ import annotations
 
-import concurrent.futures as cf
+import functools
 import hashlib
 import json
 import math
-import multiprocessing
 import os
 import time
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
-from ..progress import Progress
+from .. import runner
+from ..errors import MiBrdfsError
 from . import grid
 
 #: Incident angles (degrees) of Mitsuba's own χ² harness: normal, 45°, grazing (cosθ = 0.1).
@@ -170,11 +171,13 @@ def _init_worker(workdir: str):
 
 
 def run(cases: list[grid.Case], variant: str, quick: bool, cache: Path, processes: int = 2,
-        progress: bool = True) -> list[dict]:
+        progress: bool = True, check=run_case) -> list[dict]:
     """
     The records of every case, from ``cache`` where a previous run left them, else computed in
-    ``processes`` worker processes. A worker that dies (a crash inside Mitsuba) is a ``crash``
-    record for its case; the pool is restarted for the others.
+    ``processes`` worker processes (``check(case, variant, quick)``: :func:`run_case`). A worker
+    that dies (a crash inside Mitsuba) is a ``crash`` record for its case; the pool is
+    restarted for the others. A case whose run raises is one line, and one MiBrdfsError once
+    the others are done (and cached).
     """
     cache.mkdir(parents=True, exist_ok=True)
     records: dict[str, list] = {}
@@ -184,57 +187,52 @@ def run(cases: list[grid.Case], variant: str, quick: bool, cache: Path, processe
         if path.exists():
             records[c.key] = json.loads(path.read_text())
         else:
-            todo.append((c, path))
-    bar = Progress(len(cases), label="audit", unit=" cases") if progress else None
-    done = len(records)
-    if bar:
-        bar.update(done)
-    ctx = multiprocessing.get_context("spawn")
+            todo.append(c)
+
+    def keep(case, out):
+        path = cache / f"{cache_key(case, variant, quick)}.json"
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(json.dumps(out, indent=1))
+        tmp.replace(path)
+        records[case.key] = out
+
+    pool = functools.partial(_pool, check=functools.partial(check, variant=variant, quick=quick),
+                             cache=cache, keep=keep)
+    failed = []
     while todo:
-        with cf.ProcessPoolExecutor(max_workers=max(1, processes), mp_context=ctx,
-                                    initializer=_init_worker,
-                                    initargs=(str(cache / "scratch"),)) as pool:
-            futures = {pool.submit(run_case, c, variant, quick): (c, path) for c, path in todo}
-            broken = []
-            for future in cf.as_completed(futures):
-                c, path = futures[future]
-                try:
-                    out = future.result()
-                except BrokenProcessPool:
-                    broken.append((c, path))
-                    continue
-                tmp = path.with_suffix(".tmp")
-                tmp.write_text(json.dumps(out, indent=1))
-                tmp.replace(path)
-                records[c.key] = out
-                done += 1
-                if bar:
-                    bar.update(done, note=c.key)
+        broken = pool(todo, processes, progress, failed)
         if broken and len(broken) == len(todo):
             # every remaining case died with the pool: run them one at a time to find which
+            for c in broken:
+                if pool([c], 1, False, failed):
+                    from ..checks.result import CheckResult
+                    keep(c, [_record(c, variant, CheckResult(
+                        "crash", False, math.nan, "n/a",
+                        "the worker process died while checking this BSDF"))])
             todo = []
-            for c, path in broken:
-                records[c.key] = _run_alone(c, variant, quick, path)
-                done += 1
-                if bar:
-                    bar.update(done, note=c.key)
         else:
             todo = broken
-    if bar:
-        bar.close()
+    if failed:
+        raise MiBrdfsError(f"audit: {len(failed)} of {len(cases)} cases failed (each above); the "
+                           f"others are kept in {cache}, and the same command runs only those")
     return [r for c in cases for r in records[c.key]]
 
 
-def _run_alone(case, variant, quick, path) -> list[dict]:
-    ctx = multiprocessing.get_context("spawn")
-    with cf.ProcessPoolExecutor(max_workers=1, mp_context=ctx, initializer=_init_worker,
-                                initargs=(str(path.parent / "scratch"),)) as pool:
-        try:
-            out = pool.submit(run_case, case, variant, quick).result()
-        except BrokenProcessPool:
-            from ..checks.result import CheckResult
-            out = [_record(case, variant, CheckResult(
-                "crash", False, math.nan, "n/a",
-                "the worker process died while checking this BSDF"))]
-    path.write_text(json.dumps(out, indent=1))
-    return out
+def _pool(todo: list, processes: int, progress: bool, failed: list, *, check, cache,
+          keep) -> list:
+    """``todo`` on ``processes`` worker processes (each result to ``keep``); the cases lost
+    with a worker that died, in order; a case that raised is a line and goes to ``failed``."""
+    broken = []
+
+    def failure(case, error):
+        if isinstance(error, BrokenProcessPool):
+            broken.append(case)
+        else:
+            runner.report_failure("audit", case.key, error)
+            failed.append(case)
+
+    runner.run(todo, check, workers=max(1, processes), processes=True, initializer=_init_worker,
+               initargs=(str(cache / "scratch"),), on_done=keep, on_failure=failure,
+               label="audit", unit=" cases", keep=f"{cache} (the same command resumes there)",
+               progress=progress)
+    return [c for c in todo if c in broken]

@@ -135,6 +135,8 @@ def scalar_ratios(ctx: Context, s: Section, pairs=PAIRS) -> list:
             def run(key, defines, pair=pair):
                 results[key] = render(pair.scene, spp=spp, defines=dict(defines, res=str(res)),
                                       progress=False)
+                if results[key].interrupted:  # render keeps a partial image; the bench stops
+                    raise KeyboardInterrupt
             times = interleaved({"plugin": lambda: run("plugin", pair.ours),
                                  "built-in": lambda: run("built-in", pair.ref)}, repeats=repeats)
             ratio = median_ratio(times, "plugin", "built-in")

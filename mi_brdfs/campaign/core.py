@@ -135,10 +135,7 @@ def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs va
     for i, make in enumerate(sections):
         t0 = time.perf_counter()
         use_variant(ctx.variant)
-        with warnings.catch_warnings():
-            # parameter grids include deliberately energy-gaining sets: their warnings are noise
-            warnings.simplefilter("ignore", MiBrdfsWarning)
-            section = make(ctx)
+        section = _section(make, ctx)
         section.seconds = time.perf_counter() - t0
         done.append(section)
         if bar:
@@ -196,6 +193,31 @@ def run(sections, ctx: Context, progress: bool = True, title: str = "mi_brdfs va
     for s in done:
         values.update(s.values)
     return report, done, values
+
+
+def _section(make, ctx: Context) -> Section:
+    """One section, made in this process. Parameter grids include deliberately energy-gaining
+    sets: their warnings are noise. A Ctrl-C stops the report (KeyboardInterrupt), also where
+    drjit wrapped it (:func:`_interrupted`)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MiBrdfsWarning)
+        try:
+            return make(ctx)
+        except Exception as e:
+            if _interrupted(e):
+                raise KeyboardInterrupt from None
+            raise
+
+
+def _interrupted(error: BaseException) -> bool:
+    """Whether a KeyboardInterrupt caused ``error``: a Ctrl-C while Mitsuba runs a Python
+    plugin's method (a scalar render) reaches the caller as drjit's RuntimeError ("error while
+    performing a custom differentiable operation") with the KeyboardInterrupt as its cause."""
+    while error is not None:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        error = error.__cause__ or error.__context__
+    return False
 
 
 def _per_subject(rows) -> list:

@@ -9,6 +9,8 @@ import sys
 from pathlib import Path
 
 from ..bsdfspec import loaded_once
+from .reports import jit_variant as _jit_variant
+from .reports import report_folder as _report_folder
 
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130
@@ -45,9 +47,9 @@ def cmd_check(args) -> int:
     from ..bsdfspec import describe
     from ..checks import format_table, run_battery
 
-    from ..imageio import check_writable
+    from ..imageio import planned_outputs
 
-    json_path = check_writable(args.json) if args.json else None
+    json_path = planned_outputs("check", named=[args.json])[0] if args.json else None
     variant = mi_brdfs.use_variant(args.variant)
     specs = _bsdfs(args.bsdf)
     failed, report = 0, []
@@ -75,12 +77,13 @@ def cmd_furnace(args) -> int:
     from ..bsdfspec import describe
     from ..checks.albedo import DEFAULT_THETAS, albedo_curve
     from ..checks.furnace import check_furnace
-    from ..imageio import check_writable, write_exr, write_png
+    from ..imageio import write_exr, write_png
 
+    thetas = _thetas(args.thetas) or DEFAULT_THETAS
+    out, png = _exr_and_png(args, "furnace.exr", "name another EXR with -o") if args.render \
+        else (None, None)
     variant = mi_brdfs.use_variant(args.variant)
     specs = _bsdfs(args.bsdf)
-    thetas = _thetas(args.thetas) or DEFAULT_THETAS
-    out = check_writable(args.output) if args.render else None
     for spec in specs:
         curve = albedo_curve(spec, thetas, n=args.samples, progress=True)
         print(f"\ndirectional albedo of {describe(spec)} ({variant}; brightest channel)")
@@ -95,8 +98,8 @@ def cmd_furnace(args) -> int:
                 "furnace.nonfinite": r.nonfinite, "render.variant": variant,
                 "render.spp": r.spp, "mi_brdfs.version": mi_brdfs.__version__}
         write_exr(out, r.image, meta)
-        write_png(out.with_suffix(".png"), r.image)
-        print(f"\n{result.message}\nwrote {out} and {out.with_suffix('.png')}")
+        write_png(png, r.image)
+        print(f"\n{result.message}\nwrote {out} and {png}")
         return 0 if result.passed else 1
     return 0
 
@@ -104,12 +107,11 @@ def cmd_furnace(args) -> int:
 def cmd_plot(args) -> int:
     import mi_brdfs
     from .. import plots
-    from ..imageio import check_writable
 
+    thetas = _thetas(args.thetas)
+    (out,) = _planned(args, args.output, f"{args.kind}.png")
     mi_brdfs.use_variant(args.variant)
     specs = _bsdfs(args.bsdf)
-    out = check_writable(args.output or f"{args.kind}.png")
-    thetas = _thetas(args.thetas)
     if args.kind == "lobe":
         plots.plot_lobe(specs, out, thetas or (0.0, 30.0, 60.0, 80.0), log=args.log,
                         cosine=not args.no_cos)
@@ -123,15 +125,12 @@ def cmd_plot(args) -> int:
 
 def cmd_render(args) -> int:
     import mi_brdfs
-    from ..imageio import check_writable, write_exr, write_png
+    from ..imageio import write_exr, write_png
     from ..render import render
     from ..scenes import parse_defines, scene_path
 
     path = scene_path(args.scene)
-    out = check_writable(Path(args.output) if args.output else Path.cwd() / f"{path.stem}.exr")
-    png = out.with_suffix(".png")
-    if not args.no_png:
-        check_writable(png)
+    out, png = _exr_and_png(args, f"{path.stem}.exr", "name another EXR with -o, pass --no-png")
     defines = parse_defines(args.defines)
     variant = mi_brdfs.use_variant(args.variant)
 
@@ -152,15 +151,17 @@ def cmd_render(args) -> int:
 
 def cmd_compare(args) -> int:
     import mi_brdfs
-    from ..compare import compare, parse_swaps, write_outputs
+    from ..compare import compare, exr_paths, parse_swaps, write_outputs
     from ..errors import MiBrdfsError
-    from ..imageio import check_writable
     from ..scenes import parse_defines, scene_path
 
-    if len(args.scenes) > 2 or (len(args.scenes) == 1 and not args.swap):
+    if len(args.scenes) > 2:  # (one scene without --swap: cli.modes)
         raise MiBrdfsError("compare takes A.xml B.xml, or one scene with --swap ID=BSDF")
     paths = [scene_path(s) for s in args.scenes]
-    out = check_writable(args.output)
+    out = Path(args.output or "compare.png")
+    beside = [(p, "an EXR beside the figure", "name another figure with -o")
+              for p in exr_paths(out).values()]
+    (out, *_) = _planned(args, args.output, "compare.png", beside)
     swaps = parse_swaps(args.swap)
     defines = parse_defines(args.defines)
     mi_brdfs.use_variant(args.variant)
@@ -178,20 +179,24 @@ def cmd_fit(args) -> int:
     import mi_brdfs
     from ..bsdfspec import parse_cli
     from ..fit import fit, plot_fit, write_json
-    from ..imageio import check_writable
+    from ..fit.models import chosen
+    from ..imageio import planned_outputs
+    from .modes import bsdf_count
 
-    json_path = check_writable(args.output) if args.output else None
-    plot_path = check_writable(args.plot) if args.plot else None
-    if plot_path or args.models:
+    # the mode and its options are checked (cli.modes); --models '' or a typo, before any work
+    names = chosen(args.models) if args.models is not None else None
+    if names is not None and bsdf_count(args.target) > 1:
+        mi_brdfs.use_variant(args.variant, fallback=False)
+        return _sweep(args, parse_cli(args.target))
+    json_path, plot_path = (planned_outputs("fit", named=[p])[0] if p else None
+                            for p in (args.output, args.plot))
+    if plot_path or names is not None:
         from ..plots import pyplot
         pyplot()  # matplotlib missing: say so before the fit
     mi_brdfs.use_variant(args.variant, fallback=False)
-    targets = parse_cli(args.target)
-    if args.models and (len(targets) > 1 or args.scheduler or args.workers):
-        return _sweep(args, targets)
-    (target,) = _one_bsdf(targets, "TARGET")
-    if args.models:
-        return _fit_models(args, target)
+    (target,) = _one_bsdf(parse_cli(args.target), "TARGET")
+    if names is not None:
+        return _fit_models(args, target, names)
     (model,) = _one_bsdf(parse_cli(args.model), "--model")
     result = fit(target, model, args.free, pairs=args.pairs, steps=args.steps, seed=args.seed,
                  variant=args.variant, progress=not args.quiet, metric=args.metric)
@@ -206,23 +211,14 @@ def cmd_fit(args) -> int:
     return 0
 
 
-def _fit_models(args, target) -> int:
-    """``mi-brdfs fit TARGET --models ...``."""
-    from ..errors import MiBrdfsError
-    from ..fit.models import chosen, fit_models, published_table, ranking_table
+def _fit_models(args, target, names: list) -> int:
+    """``mi-brdfs fit TARGET --models ...``: the report in --out DIR (cli.modes: by default a
+    new folder named after TARGET)."""
+    from ..fit.models import fit_models, published_table, ranking_table
     from ..fit.optimise import METRICS
     from ..markdown import md_table
 
-    names = chosen(args.models)
-    if args.free or args.output or args.plot:
-        raise MiBrdfsError("--models writes its own report (--out DIR): --free, -o and --plot "
-                           "go with --model")
-    material = args.compare_published
-    if material == "":  # the name of the MERL file
-        if not (isinstance(target, dict) and target["type"] == "merl"):
-            raise MiBrdfsError("--compare-published without a MATERIAL needs a MERL .binary "
-                               "TARGET, whose file name is the material's")
-        material = Path(target["filename"]).stem
+    material = _published_material(args.compare_published, target)
     out = _report_folder(args, "models.md")
     done = fit_models(target, names, args.metric, out, pairs=args.pairs, steps=args.steps,
                       seed=args.seed, progress=not args.quiet, compare_published=material)
@@ -234,37 +230,70 @@ def _fit_models(args, target) -> int:
     return 0
 
 
+def _published_material(material: str | None, target) -> str | None:
+    """The MERL material of --compare-published (given, or the TARGET file's name), checked
+    against the materials of the published fits before any fit runs."""
+    import difflib
+
+    from .. import presets
+    from ..errors import MiBrdfsError
+
+    if material is None:
+        return None
+    given = material != ""
+    if not given:  # the name of the MERL file
+        if not (isinstance(target, dict) and target["type"] == "merl"):
+            raise MiBrdfsError("--compare-published without a MATERIAL needs a MERL .binary "
+                               "TARGET, whose file name is the material's")
+        material = Path(target["filename"]).stem
+    known = presets.materials()
+    if material not in known:
+        close = difflib.get_close_matches(material, known, n=3, cutoff=0.6)
+        hint = f"did you mean {' or '.join(close)}? " if close else ""
+        among = f"among the {len(known)} materials of Ngan et al.'s published fits"
+        if given:
+            raise MiBrdfsError(f"--compare-published {material}: not {among} ({hint}mi-brdfs "
+                               f"presets lists them)")
+        raise MiBrdfsError(f"--compare-published: the TARGET file's name, {material}, is not "
+                           f"{among}; name the material: --compare-published MATERIAL ({hint}"
+                           f"mi-brdfs presets lists them)")
+    return material
+
+
 def _sweep(args, targets) -> int:
     """``mi-brdfs fit A.binary B.binary ... --models ...``: one task per (file, model)."""
     from ..errors import MiBrdfsError
     from ..fit.models import chosen
-    from ..fit.sweep import sweep
+    from ..fit.sweep import check_files, sweep
+    from ..runner import scheduler_address
 
+    address = scheduler_address(args.scheduler, "--scheduler") if args.scheduler else None
     files = [t["filename"] for t in targets if isinstance(t, dict) and t["type"] == "merl"
              and set(t) == {"type", "filename"}]
     if len(files) != len(targets):
         raise MiBrdfsError("a sweep (several TARGETs, --workers or --scheduler) takes MERL "
                            ".binary files only")
     names = chosen(args.models)
+    files = check_files(files)  # before the report folder: nothing made for a bad file
     out = _report_folder(args, "sweep.md")
     done = sweep(files, names, args.metric, out, pairs=args.pairs, steps=args.steps,
-                 seed=args.seed, workers=args.workers, scheduler=args.scheduler,
+                 seed=args.seed, workers=args.workers, scheduler=address,
                  progress=not args.quiet)
     print(Path(done["written"][0]).read_text())
-    print(f"{done['computed']} fits computed, {len(done['results']) - done['computed']} from "
-          f"the cache; wrote " + ", ".join(done["written"]))
+    print(f"{done['computed']} fits computed, {done['cached']} from the cache; wrote "
+          + ", ".join(done["written"]))
     return 0
 
 
 def cmd_simplify(args) -> int:
     import mi_brdfs
-    from ..imageio import check_writable
     from ..scenes import parse_defines, scene_path
     from ..simplify import simplify
 
     path = scene_path(args.scene)
-    out = check_writable(Path(args.output) if args.output
-                         else Path.cwd() / f"{path.stem}-simplified.xml")
+    report = [(Path(args.report) / name, "", "name another folder with --report")
+              for name in ("SIMPLIFY.md", "simplify.png")] if args.report else []
+    (out, *_) = _planned(args, args.output, f"{path.stem}-simplified.xml", report)
     defines = parse_defines(args.defines)
     mi_brdfs.use_variant(args.variant)
     result = simplify(path, args.tolerance, output=out, report=args.report, quick=args.quick,
@@ -275,69 +304,36 @@ def cmd_simplify(args) -> int:
     return 0
 
 
+def _planned(args, named, default: str, beside=()) -> list[Path]:
+    """
+    The output the user named (``named``: -o's value, replaced if it exists) or else
+    ``default`` in the current folder, then the files written ``beside`` it, as (path, what it
+    is, advice): all checked before any work by :func:`mi_brdfs.imageio.planned_outputs`,
+    which refuses a default or a file beside that exists unless --force. Absolute paths.
+    """
+    from ..imageio import planned_outputs
+
+    if named:
+        return planned_outputs(args.command, named=[named], unnamed=beside, force=args.force)
+    return planned_outputs(args.command, unnamed=[(default, "", "name another with -o"),
+                                                  *beside], force=args.force)
+
+
+def _exr_and_png(args, default: str, advice: str) -> tuple:
+    """(EXR, PNG preview beside it or None with --no-png): -o or ``default``, planned."""
+    if getattr(args, "no_png", False):
+        return _planned(args, args.output, default)[0], None
+    png = Path(args.output or default).with_suffix(".png")
+    return tuple(_planned(args, args.output, default,
+                          [(png, "the PNG preview beside the EXR", advice)]))
+
+
 def _one_bsdf(specs: list, what: str) -> list:
     from ..errors import MiBrdfsError
 
     if len(specs) != 1:
         raise MiBrdfsError(f"{what} names {len(specs)} BSDFs; give one")
     return specs
-
-
-def _report_folder(args, filename: str) -> Path:
-    """The report folder (created), checked writable for ``filename`` before any work."""
-    from ..imageio import output_folder
-
-    return output_folder(args.out, f"--out {args.out}", filename)
-
-
-def _jit_variant(what: str) -> str:
-    import mi_brdfs
-    from ..errors import MiBrdfsError
-
-    variant = mi_brdfs.use_variant(None)
-    if not variant.startswith(("llvm", "cuda")):
-        raise MiBrdfsError(f"{what} needs a JIT variant; {variant} is all this machine offers")
-    return variant
-
-
-def _run_report(args, sections, what: str, quotes: str | None = None, **kwargs) -> list:
-    """
-    Run a report's sections and print its verdict; the rows that are not as expected. With
-    ``quotes`` (a tag) and ``args.readme``, the figures the document quotes under that tag are
-    filled in from the run.
-    """
-    from ..campaign import Context, run
-    from ..campaign.core import fill_quotes
-    from ..errors import MiBrdfsError
-
-    readmes = getattr(args, "readme", None) or []
-    for readme in readmes:
-        if not Path(readme).is_file():
-            raise MiBrdfsError(f"--readme {readme}: no such file")
-    sections = _only_sections(args, sections, kwargs)
-    out = _report_folder(args, kwargs.get("filename", "REPORT.md"))
-    variant = _jit_variant(f"the {kwargs.get('title', 'report')}")
-    report, done, values = run(sections, Context(out=out, quick=args.quick, variant=variant),
-                               progress=not args.quiet, what=what, **kwargs)
-    rows = [r for s in done for r in s.rows]
-    failed = [r for r in rows if not r.ok]
-    if rows and not rows[0].judged:
-        print(f"wrote {report}: {len(rows)} {what}, not judged (quick run: "
-              f"{kwargs.get('quick_note', 'too small to judge')})")
-    else:
-        print(f"wrote {report}: {len(rows) - len(failed)} of {len(rows)} {what} as expected")
-    for r in failed:
-        print(f"  unexpected: {r.plugin}: {r.check}: {r.result} ({r.verdict})")
-    for readme in readmes if quotes else []:
-        count = fill_quotes(readme, values, quotes)
-        print(f"updated {readme}: {count} figures quoted from {report.name}")
-    return failed
-
-
-def section_name(section) -> str:
-    """A report section's name for ``--only``: the module that defines it (``campaign/ward.py``:
-    ``ward``)."""
-    return section.__module__.rsplit(".", 1)[-1]
 
 
 def _strict_json(value):
@@ -359,120 +355,22 @@ def _strict_json(value):
     return number if math.isfinite(number) else str(number)
 
 
-def _only_names(value: str) -> list[str]:
-    """The names of ``--only``, comma-separated; none at all (``--only ''``, ``--only ,``) is
-    an error, not a run of everything or of nothing."""
-    from ..errors import MiBrdfsError
-
-    names = [n.strip() for n in value.split(",") if n.strip()]
-    if not names:
-        raise MiBrdfsError(f"--only {value!r} names nothing: give one or more names, "
-                           f"comma-separated (or leave --only out to run everything)")
-    return names
-
-
-def _only_sections(args, sections, kwargs) -> list:
-    """The sections ``--only`` names (all without it), in the report's order; the command line
-    in ``kwargs`` says which. An unknown name, or ``--only`` with ``--readme`` (a partial run
-    cannot fill every quoted figure), is one error."""
-    from ..errors import MiBrdfsError
-
-    if getattr(args, "only", None) is None:
-        return sections
-    names = _only_names(args.only)
-    known = [section_name(s) for s in sections]
-    unknown = [n for n in names if n not in known]
-    if unknown:
-        raise MiBrdfsError(f"--only {args.only}: no section {', '.join(unknown) or 'named'} "
-                           f"(sections: {', '.join(known)})")
-    if getattr(args, "readme", None):
-        raise MiBrdfsError("--only with --readme: a partial run cannot fill every figure the "
-                           "documents quote; run without --only")
-    kwargs["command"] = kwargs.get("command", "mi-brdfs validate") + f" --only {args.only}"
-    return [s for s in sections if section_name(s) in names]
-
-
-def cmd_audit(args) -> int:
-    import os
-    import time
-
-    from ..audit import grid, report, run
-    from ..errors import MiBrdfsError
-    from ..registry import use_variant
-
-    if not args.variant.startswith(("llvm_", "cuda_")):
-        raise MiBrdfsError(f"--variant {args.variant}: the audit needs a JIT variant (χ² runs "
-                           f"on mitsuba.chi2), e.g. llvm_ad_rgb")
-    out = _report_folder(args, "MITSUBA_AUDIT.md")
-    use_variant(args.variant, fallback=False)  # fail here, in one line, if it is unusable
-    cases = grid.all_cases()
-    if args.quick:
-        cases = [c for c in cases if c.quick]
-    if args.only is not None:
-        names = set(_only_names(args.only))
-        unknown = names - {c.bsdf for c in grid.all_cases()}
-        if unknown:
-            raise MiBrdfsError(f"--only {args.only}: no audit configuration for "
-                               f"{', '.join(sorted(unknown))} (the audit knows: "
-                               f"{', '.join(sorted({c.bsdf for c in grid.all_cases()}))})")
-        cases = [c for c in cases if c.bsdf in names]
-        if not cases:  # before anything is written: the report stays as it was
-            raise MiBrdfsError(f"--only {args.only} --quick: none of these is in the quick "
-                               f"audit (its BSDFs: "
-                               f"{', '.join(sorted({c.bsdf for c in grid.all_cases() if c.quick}))}"
-                               f"); leave --quick out")
-    t0 = time.perf_counter()
-    records = run.run(cases, args.variant, args.quick, out / "audit" / ".cache",
-                      processes=args.processes or min(os.cpu_count() or 1, 4),
-                      progress=not args.quiet)
-    exits = None
-    if not args.quick and not args.only:  # the whole audit reruns its evidence
-        from ..audit import reproducers
-        exits = reproducers.run_all(processes=args.processes or 2)
-    command = "mi-brdfs audit" + (" --quick" if args.quick else "") + \
-        (f" --only {args.only}" if args.only else "") + \
-        (f" --variant {args.variant}" if args.variant != "llvm_ad_rgb" else "")
-    md, js, counts = report.write(records, out, command, time.perf_counter() - t0,
-                                  args.variant, args.quick, exits=exits)
-    print(f"wrote {md} and {js}: " + ", ".join(f"{n} {v}" for v, n in sorted(counts.items())))
-    broken = [p for p, code in (exits or {}).items() if code not in (0, 1)]
-    for path in broken:
-        print(f"  broken reproducer: {path} (neither 0 nor 1; see the report)")
-    return 1 if counts.get("untriaged") or broken else 0
-
-
-def cmd_validate(args) -> int:
-    from ..campaign import sections
-
-    return 1 if _run_report(args, sections(), "checks", quotes="report") else 0
-
-
-def cmd_bench(args) -> int:
-    from ..benchmark import sections
-
-    _run_report(args, sections(), "measurements", quotes="bench",
-                title="mi_brdfs speed vs accuracy",
-                filename="SPEED_ACCURACY.md", command="mi-brdfs bench", make_target="make bench",
-                quick_note="tiny renders whose timings are too short to judge the targets",
-                judge_quick=False)
-    return 0  # a benchmark reports targets met or missed; it does not fail
-
-
 def cmd_measure(args) -> int:
     import numpy as np
 
     from ..errors import MiBrdfsError
-    from ..imageio import check_writable
+    from ..imageio import planned_outputs
     from ..measured.tabulate import measure
 
     from ..registry import use_variant
 
-    out = check_writable(args.output)
+    (out,) = planned_outputs("measure", named=[args.output])
     use_variant(args.variant or "llvm_ad_rgb", fallback=False)
     specs = _bsdfs(args.bsdf)
     if len(specs) != 1:
         raise MiBrdfsError(f"measure: {len(specs)} BSDFs given; give one")
-    values = measure(specs[0], out, variant=args.variant, noise=args.noise, seed=args.seed)
+    values = measure(specs[0], out, variant=args.variant, noise=args.noise or (0.0, 0.0),
+                     seed=args.seed or 0)  # (--seed goes with --noise: cli.modes)
     measured = int(np.count_nonzero(~np.isnan(values[0])))
     print(f"wrote {out}: {measured} of {values[0].size} bins measured (the others below the "
           f"horizon), f up to {np.nanmax(values):.4g}")
@@ -484,10 +382,11 @@ def cmd_tables(args) -> int:
     from ..progress import Progress
     from ..scattering.multiscatter import TABLE_PATH
 
-    from ..imageio import check_writable
+    from ..imageio import planned_outputs
 
     _jit_variant("mi-brdfs tables")
-    out = check_writable(args.out or TABLE_PATH)  # before minutes of work, not after
+    # before minutes of work; without -o, the package's own tables, which it exists to rebuild
+    (out,) = planned_outputs("tables", named=[args.out or TABLE_PATH])
     samples = args.samples or tables.SAMPLES
     samples_dielectric = args.samples or tables.SAMPLES_DIELECTRIC
     rows = len(tables.KINDS) * (len(tables.SHADOWINGS) * tables.N_ALPHA +
@@ -502,6 +401,40 @@ def cmd_tables(args) -> int:
           f"({samples} x {samples} samples per node); E(mu, alpha, eta) of the dielectric on "
           f"{tables.N_MU_DIELECTRIC} x {tables.N_ALPHA_DIELECTRIC} x {tables.N_ETA} nodes "
           f"({samples_dielectric} x {samples_dielectric} samples per node)")
+    return 0
+
+
+def cmd_presets(args) -> int:
+    """The materials of the published fits and the plugins that take each as a preset."""
+    from .. import presets
+    from ..errors import MiBrdfsError
+
+    plugins = sorted(presets.DEFAULT_MODEL)
+    if args.plugin is not None:
+        if args.plugin not in plugins:
+            raise MiBrdfsError(f"presets {args.plugin}: no presets; the plugins that take "
+                               f"preset=... are {', '.join(plugins)}")
+        names = presets.names(args.plugin)
+        if not names:
+            raise MiBrdfsError(f"presets {args.plugin}: no published fit converts exactly to "
+                               f"{args.plugin}'s parameters (docs/presets.md says why)")
+        print("\n".join(names))
+        return 0
+    takes = {p: set(presets.names(p)) for p in plugins}
+    columns = [(p, prefix) for p in plugins
+               for prefix in sorted({n.split(":")[0] for n in takes[p]})]
+    print(f"Presets: Ngan, Durand & Matusik's (2005) fits to {len(presets.materials())} MERL "
+          f"materials, as <string name=\"preset\" value=\"ngan:MATERIAL\"/> or preset=ngan:"
+          f"MATERIAL (docs/presets.md); x: the plugin takes that material's fit exactly.")
+    for model, _, plugin, _, how in presets.table():
+        print(f"  {plugin:<12} {model:<17} {how}")
+    width = max(map(len, presets.materials()))
+    heads = [p if prefix == presets.SOURCE else f"{p} ({prefix}:)" for p, prefix in columns]
+    print("\n" + f"{'material':<{width}}  " + "  ".join(heads))
+    for material in presets.materials():
+        marks = ["x" if f"{prefix}:{material}" in takes[p] else "-" for p, prefix in columns]
+        print(f"{material:<{width}}  " + "  ".join(f"{m:<{len(h)}}" for m, h in
+                                                  zip(marks, heads)).rstrip())
     return 0
 
 

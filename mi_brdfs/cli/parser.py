@@ -12,9 +12,10 @@ from pathlib import Path
 from ..fit.optimise import METRICS
 
 from .commands import (
-    EXIT_USER_ERROR, cmd_audit, cmd_bench, cmd_check, cmd_compare, cmd_fit, cmd_furnace, cmd_info,
-    cmd_measure, cmd_plot, cmd_render, cmd_simplify, cmd_tables, cmd_validate,
+    EXIT_USER_ERROR, cmd_check, cmd_compare, cmd_fit, cmd_furnace, cmd_info, cmd_measure,
+    cmd_plot, cmd_presets, cmd_render, cmd_simplify, cmd_tables,
 )
+from .reports import cmd_audit, cmd_bench, cmd_validate
 
 
 class _Parser(argparse.ArgumentParser):
@@ -74,6 +75,14 @@ def _output(*suffixes: str):
     return parse
 
 
+def _add_force(p: argparse.ArgumentParser, what: str, named: bool = True) -> None:
+    """--force: replace the files ``what`` names (without it, each that exists is refused)."""
+    p.add_argument("--force", action="store_true",
+                   help=f"replace {what} that already exist (without it, such a file is "
+                        f"refused before any work" + ("; a file named with -o is replaced)"
+                                                      if named else ")"))
+
+
 def _add_variant(p: argparse.ArgumentParser) -> None:
     p.add_argument("--variant", metavar="V",
                    help="Mitsuba variant (default: llvm_ad_rgb where LLVM works, else scalar_rgb)")
@@ -103,6 +112,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_audit(sub)
     _add_tables(sub)
     _add_measure(sub)
+    _add_presets(sub)
     _add_info(sub)
     return parser
 
@@ -117,6 +127,7 @@ def _add_render(sub) -> None:
                    help="scene XML file or bundled scene name (default: showcase)")
     r.add_argument("-o", "--output", metavar="OUT.exr", type=_output(".exr"),
                    help="output EXR (default: ./<scene name>.exr); the PNG goes beside it")
+    _add_force(r, "the default output and the PNG beside the EXR")
     r.add_argument("--spp", type=_count, metavar="N",
                    help="samples per pixel (default: the scene's sampler; unlimited with "
                         "--time-budget)")
@@ -132,8 +143,8 @@ def _add_render(sub) -> None:
                    help="render processes for scalar scenes with Python plugins, this one "
                         "included (default: one per core when it pays)")
     r.add_argument("--no-png", action="store_true", help="write no PNG preview")
-    r.add_argument("--exposure", type=_finite, default=0.0,
-                   help="PNG exposure in stops (default 0)")
+    r.add_argument("--exposure", type=_finite,
+                   help="PNG exposure in stops (default 0; not with --no-png)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_render)
 
@@ -181,11 +192,12 @@ def _add_furnace(sub) -> None:
     f.add_argument("--thetas", metavar="DEG,...", help="incident angles in degrees")
     f.add_argument("-n", "--samples", type=_count, metavar="N", help="samples per angle")
     f.add_argument("--render", action="store_true", help="render the furnace (first BSDF)")
-    f.add_argument("-o", "--output", metavar="OUT.exr", default="furnace.exr",
-                   type=_output(".exr"),
-                   help="furnace image (default: ./furnace.exr)")
-    f.add_argument("--spp", type=_count, default=128, help="furnace spp (default 128)")
-    f.add_argument("--res", type=_count, default=64, help="furnace resolution (default 64)")
+    f.add_argument("-o", "--output", metavar="OUT.exr", type=_output(".exr"),
+                   help="furnace image, with --render (default: ./furnace.exr); the PNG goes "
+                        "beside it")
+    f.add_argument("--spp", type=_count, help="furnace spp, with --render (default 128)")
+    f.add_argument("--res", type=_count, help="furnace resolution, with --render (default 64)")
+    _add_force(f, "the default output and the PNG beside the EXR (with --render)")
     f.set_defaults(func=cmd_furnace)
 
 
@@ -198,10 +210,11 @@ def _add_plot(sub) -> None:
                        (("kind",), {"choices": ["lobe", "albedo", "slice"]}))
     pl.add_argument("-o", "--output", metavar="OUT.png", type=_output(".png", ".pdf", ".svg"),
                     help="default: ./<kind>.png")
+    _add_force(pl, "the default output")
     pl.add_argument("--thetas", metavar="DEG,...", help="incident angles (lobe, albedo)")
     pl.add_argument("--log", action="store_true", help="logarithmic radius (lobe)")
     pl.add_argument("--no-cos", action="store_true", help="plot f instead of f·cosθo (lobe)")
-    pl.add_argument("--res", type=_count, default=128, help="slice resolution (default 128)")
+    pl.add_argument("--res", type=_count, help="slice resolution (slice; default 128)")
     pl.add_argument("-n", "--samples", type=_count, metavar="N",
                     help="samples per angle (albedo)")
     pl.set_defaults(func=cmd_plot)
@@ -217,16 +230,17 @@ def _add_compare(sub) -> None:
                                     "(the same numbers between two seeds of A).")
     cp.add_argument("scenes", nargs="+", metavar="SCENE", help="A.xml [B.xml] (or bundled names)")
     cp.add_argument("--swap", action="append", default=[], metavar="ID=BSDF",
-                    help="B = A with <bsdf id=ID> replaced, e.g. "
+                    help="with one SCENE: B = A with <bsdf id=ID> replaced, e.g. "
                          "--swap \"material=roughconductor alpha=0.3\" (repeatable)")
     _add_variant(cp)
     cp.add_argument("--spp", type=_count, default=64, help="samples per pixel (default 64)")
     cp.add_argument("--seed", type=_seed, default=0)
     cp.add_argument("-D", dest="defines", action="append", default=[], metavar="name=value",
                     help="override a <default> of the scene(s) (repeatable)")
-    cp.add_argument("-o", "--output", metavar="OUT.png", default="compare.png",
-                    type=_output(".png"),
-                    help="figure (default ./compare.png); EXRs beside it")
+    cp.add_argument("-o", "--output", metavar="OUT.png", type=_output(".png"),
+                    help="figure (default ./compare.png); EXRs beside it (OUT-A.exr, OUT-B.exr, "
+                         "OUT-diff.exr)")
+    _add_force(cp, "the default output and the EXRs beside the figure")
     cp.set_defaults(func=cmd_compare)
 
 
@@ -253,24 +267,30 @@ def _add_fit(sub) -> None:
                        help="fit every lecture model (all: phong, ward, cooktorrance, ashikhmin, "
                             "lafortune, he), or those named, from the lecture's starts (mi_brdfs.fit."
                             "models); write --out DIR/models.md (each scored under every metric "
-                            "and ranked), models.json, lobes.png and spheres.png")
-    ft.add_argument("--out", metavar="DIR", default=".",
-                    help="the folder of --models' report (default: the current folder)")
+                            "and ranked), models.json, lobes.png and spheres.png; with several "
+                            "TARGET files, a sweep: DIR/sweep.md and sweep.json")
+    ft.add_argument("--out", metavar="DIR",
+                    help="with --models: the report's folder (default: a new folder "
+                         "./<TARGET name>-models; a sweep's: ./sweep)")
+    _add_force(ft, "the files of --models' report", named=False)
     ft.add_argument("--compare-published", nargs="?", const="", metavar="MATERIAL",
-                    help="with --models: score Ngan et al.'s 2005 published fits of MATERIAL (a "
-                         "MERL material's name; default: the TARGET file's name) beside ours")
+                    help="with --models and one TARGET: score Ngan et al.'s 2005 published fits "
+                         "of MATERIAL (a MERL material's name; default: the TARGET file's name) "
+                         "beside ours")
     ft.add_argument("--workers", type=_count, metavar="N",
-                    help="with several TARGET files and --models: fits run at once, one process "
-                         "each (default: one per core)")
+                    help="a sweep's (several TARGET files and --models): fits run at once, one "
+                         "process each (default: one per core)")
     ft.add_argument("--scheduler", metavar="tcp://HOST:PORT",
-                    help="with --models: run the fits on this Dask cluster (pip install "
-                         "'mi-brdfs[sweep]'; see mi_brdfs.fit.sweep)")
+                    help="a sweep's (several TARGET files and --models): run the fits on this "
+                         "Dask cluster (pip install 'mi-brdfs[sweep]'; see mi_brdfs.fit.sweep)")
     ft.add_argument("--free", metavar="P1,P2,...",
-                    help="the parameters to fit, by name (default: all of MODEL's continuous ones)")
+                    help="with --model: the parameters to fit, by name (default: all of MODEL's "
+                         "continuous ones)")
     ft.add_argument("-o", "--output", metavar="FIT.json", type=_output(".json"),
-                    help="write the result as JSON")
+                    help="with --model: write the result as JSON")
     ft.add_argument("--plot", metavar="FIT.png", type=_output(".png", ".pdf", ".svg"),
-                    help="plot target against fit: lobes in the plane of incidence and E(θ)")
+                    help="with --model: plot target against fit: lobes in the plane of "
+                         "incidence and E(θ)")
     ft.add_argument("--variant", metavar="V", default="llvm_ad_rgb",
                     help="Mitsuba variant with automatic differentiation (default: llvm_ad_rgb)")
     ft.add_argument("--pairs", type=_count, default=16384, metavar="N",
@@ -306,6 +326,7 @@ def _add_simplify(sub) -> None:
     _add_variant(sm)
     sm.add_argument("-o", "--output", metavar="SIMPLIFIED.xml", type=_output(".xml"),
                     help="the simplified scene (default: ./<scene name>-simplified.xml)")
+    _add_force(sm, "the default output and the report's files (--report)")
     sm.add_argument("--report", metavar="DIR",
                     help="write SIMPLIFY.md and simplify.png there (and keep the cache in "
                          "DIR/cache)")
@@ -333,9 +354,9 @@ def _report_command(sub, name, summary, description, quick, target, tag):
     """A subcommand that writes a report into --out (and quotes into --readme)."""
     cmd = sub.add_parser(name, help=summary, description=description)
     cmd.add_argument("--quick", action="store_true", help=quick)
-    cmd.add_argument("--out", metavar="DIR", default=".",
-                     help=f"report folder (default: the current directory; {target}: "
-                          f"validation)")
+    cmd.add_argument("--out", metavar="DIR", default="validation",
+                     help=f"report folder (default: ./validation, as {target})")
+    _add_force(cmd, "the report's file in --out DIR", named=False)
     cmd.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     cmd.add_argument("--only", metavar="SECTION[,SECTION]",
                      help="run only these sections (by name, e.g. the plugin's: the list is in "
@@ -383,9 +404,9 @@ def _add_audit(sub) -> None:
     au.add_argument("--quick", action="store_true",
                     help="a few configurations, 10× fewer samples (the test suite's run; writes "
                          "MITSUBA_AUDIT-quick.md)")
-    au.add_argument("--out", metavar="DIR", default=".",
-                    help="report folder (default: the current directory; make audit: "
-                         "validation)")
+    au.add_argument("--out", metavar="DIR", default="validation",
+                    help="report folder (default: ./validation, as make audit)")
+    _add_force(au, "the report's files in --out DIR", named=False)
     au.add_argument("--variant", metavar="V", default="llvm_ad_rgb",
                     help="JIT variant of the audit (default llvm_ad_rgb; cuda_ad_rgb on a "
                          "machine with a CUDA GPU); polarized BSDFs run in the same backend's "
@@ -425,11 +446,11 @@ def _add_measure(sub) -> None:
                       ".binary file that the tools reading MERL's data read.")
     m.add_argument("-o", "--output", required=True, type=_output(".binary"),
                    metavar="FILE.binary", help="where to write it")
-    m.add_argument("--noise", type=_noise, default=(0.0, 0.0), metavar="REL[,ABS]",
+    m.add_argument("--noise", type=_noise, metavar="REL[,ABS]",
                    help="measurement noise: f·(1 + REL·ε₁) + ABS·ε₂, ε standard normal per bin "
                         "and channel, clipped at 0 (default: none)")
-    m.add_argument("--seed", type=_seed, default=0, metavar="S",
-                   help="seed of the noise (default: 0)")
+    m.add_argument("--seed", type=_seed, metavar="S",
+                   help="seed of the noise, with --noise (default: 0)")
     m.set_defaults(func=cmd_measure)
 
 
@@ -442,6 +463,19 @@ def _noise(text: str) -> tuple[float, float]:
     if not 1 <= len(parts) <= 2 or not all(math.isfinite(p) and p >= 0 for p in parts):
         raise argparse.ArgumentTypeError(f"'{text}' is not REL or REL,ABS (numbers ≥ 0)")
     return (parts[0], parts[1] if len(parts) == 2 else 0.0)
+
+
+def _add_presets(sub) -> None:
+    """``mi-brdfs presets``."""
+    p = sub.add_parser(
+        "presets", help="the published fits the plugins take as preset=...",
+        description="The presets: Ngan, Durand & Matusik's (2005) fits of the lecture models "
+                    "to the MERL materials, which a plugin takes as preset=ngan:MATERIAL "
+                    "(docs/presets.md): every material, and which plugins take it; with "
+                    "PLUGIN, that plugin's presets, one per line.")
+    p.add_argument("plugin", nargs="?", metavar="PLUGIN",
+                   help="list this plugin's presets (e.g. ward)")
+    p.set_defaults(func=cmd_presets)
 
 
 def _add_info(sub) -> None:

@@ -130,7 +130,7 @@ from ..errors import MiBrdfsError, arguments, counts, valid_seed
 from ..variants import keeps_variant
 from .flags import fit_flags
 from .optimise import (
-    EPSILON, METRICS, _best, _require_ad_rgb, _run_starts, _target_values, check_metric,
+    EPSILON, METRICS, _best, _run_starts, _target_values, check_metric,
     direction_pairs,
 )
 from .parameters import (
@@ -183,9 +183,11 @@ def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: f
     width mapping or spread widths) or ``'given'`` (MODEL's values only).
     Parameter ``metric``: the objective, one of :data:`~mi_brdfs.fit.optimise.METRICS`
     (default: the cube root).
-    Parameter ``variant``: an RGB AD variant to fit in (default: the current one, which must
-    be one; ``llvm_ad_rgb`` when none is set). The caller's variant is set again on return,
-    and when the fit raises (:func:`mi_brdfs.variants.variant_kept`).
+    Parameter ``variant``: an RGB AD variant to fit in (default: the current one where it is
+    one, else ``llvm_ad_rgb``: from ``scalar_rgb``, say, the fit switches to it). The caller's
+    variant is set again on return, and when the fit raises
+    (:func:`mi_brdfs.variants.variant_kept`); a loaded ``mi.BSDF`` is of its variant, so give
+    the target as a dict or a string to fit from another.
 
     Returns → :class:`FitResult`, whose ``flags`` say in words what makes the fit useless or
     unphysical (:mod:`~mi_brdfs.fit.flags`: a parameter at a bound, no better than the zero
@@ -196,9 +198,10 @@ def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: f
     import mitsuba as mi
 
     from ..bsdfspec import load_bsdf, parse
+    from ..registry import use_rgb_jit
 
     clock = time.perf_counter()
-    variant = _require_ad_rgb(variant)
+    variant = use_rgb_jit("fit", variant, ad=True)
     thetas = _checked(starts, lr, thetas_deg)
     check_metric(metric)
     target = parse(target)

@@ -74,14 +74,19 @@ def _conductor_material(target):
 
 
 def chosen(names: str) -> list:
-    """The models of ``--models``: ``all`` or comma-separated names of :data:`STYLES`."""
+    """The models of ``--models``: ``all`` or comma-separated names of :data:`STYLES` (each
+    once); one line for a name that is none, or for none at all (``--models ''``)."""
     from ..errors import MiBrdfsError
 
-    picked = list(STYLES) if names == "all" else [n.strip() for n in names.split(",")]
+    allowed = f"give 'all' or names among {', '.join(STYLES)}, comma-separated"
+    picked = list(STYLES) if names.strip() == "all" else \
+        list(dict.fromkeys(n.strip() for n in names.split(",") if n.strip()))
+    if not picked:
+        raise MiBrdfsError(f"--models {names!r} names no model: {allowed}")
     unknown = [n for n in picked if n not in STYLES]
-    if unknown or not picked:
-        raise MiBrdfsError(f"--models {names}: {', '.join(unknown) or 'nothing'} is not a lecture "
-                           f"model; give 'all' or names among {', '.join(STYLES)}")
+    if unknown:
+        raise MiBrdfsError(f"--models {names}: {', '.join(unknown)} is not a lecture model; "
+                           f"{allowed}")
     return picked
 
 

@@ -135,13 +135,16 @@ def _target_values(target, target_bsdf, pairs: int, seed: int, notes: list):
 
     if type(target_bsdf).__name__ == "Merl":
         wi, wo, target_values = measured_pairs(target_bsdf.filename, pairs, seed)
+        if len(wi) == 0:  # the pairs are drawn among the measured bins: there is none
+            raise MiBrdfsError(f"fit: {target_bsdf.filename} has no measured bin above the "
+                               f"horizon: nothing to fit, with any number of pairs")
         notes.append(f"measured target: {len(wi)} of its bins, at their centres")
     else:
         wi, wo = direction_pairs(pairs, seed)
         target_values = None
     if len(wi) == 0:
         raise MiBrdfsError(f"fit: pairs = {pairs} leaves no direction pair above the horizon "
-                           f"(about 3/4 of them are kept): give more pairs, e.g. 4096")
+                           f"(about 3/4 of them are kept): give more pairs (default 16384)")
     if target_values is None:
         target_values = batch.evaluate(target_bsdf, wi, wo).value
     target_values = np.broadcast_to(target_values, (len(wi), 3)) if target_values.shape[1] == 1 \
@@ -160,24 +163,6 @@ def _target_values(target, target_bsdf, pairs: int, seed: int, notes: list):
 # -------------------------------------------------------------------------------------------------
 # Adam from each start
 # -------------------------------------------------------------------------------------------------
-
-
-def _require_ad_rgb(variant: str | None) -> str:
-    import drjit as dr
-    import mitsuba as mi
-
-    from ..registry import use_variant
-
-    if variant is not None:
-        use_variant(variant, fallback=False)
-    elif mi.variant() is None:
-        use_variant("llvm_ad_rgb", fallback=False)
-    current = mi.variant()
-    if not dr.is_diff_v(mi.Float) or not mi.is_rgb or mi.is_polarized:
-        raise MiBrdfsError(f"fit needs an RGB variant with automatic differentiation "
-                           f"(llvm_ad_rgb or cuda_ad_rgb); {current} has "
-                           f"{'no AD' if not dr.is_diff_v(mi.Float) else 'no plain RGB'}")
-    return current
 
 
 def _run(bsdf, params: list[Parameter], start: dict, si, wo, target_c, weight, metric: str,

@@ -7,36 +7,40 @@ their mean rank over the materials: Ngan et al. 2005's comparison, for the user'
 One code path for every scheduler: a task is :func:`run_task`, which runs the fit in a Python
 process of its own (``python -m mi_brdfs.fit.sweep TASK``), because Mitsuba registers Python
 plugins per process and a process keeps its variant, its JIT caches and its memory; the result
-comes back as JSON. Locally a thread pool of ``workers`` runs the tasks (each thread waits on
-its process); with ``scheduler`` (``tcp://HOST:PORT``) a Dask cluster does
+comes back as JSON. :func:`mi_brdfs.runner.run` runs the tasks: locally on ``workers`` threads
+(each waits on its process), or with ``scheduler`` (``tcp://HOST:PORT``) on a Dask cluster
 (`dask.distributed <https://distributed.dask.org>`_, the optional extra ``mi-brdfs[sweep]``;
 on SLURM or PBS, `dask-jobqueue <https://jobqueue.dask.org>`_ starts the workers and gives the
 address), each worker running the same :func:`run_task`. The machines need the files at the
 same paths and mi_brdfs installed.
 
-Finished tasks are kept in ``OUT/.sweep-cache/`` under the SHA-256 of the material file's
-content and the settings (model, metric, pairs, steps, seed, mi_brdfs's version): a sweep that
-stops (Ctrl-C, a lost worker) resumes where it was, and one that changes nothing recomputes
-nothing.
+Before any fit: the scheduler's address is parsed, every file checked (there, readable, a MERL
+file's size and dimensions), a file given twice (by path or by content) kept once, and the
+scheduler reached (the runner's checks). A fit that fails is one line and the others go on;
+Ctrl-C or SIGTERM stops the sweep at once. Either way every finished fit is kept in
+``OUT/.sweep-cache/`` under the SHA-256 of the material file's content and the settings
+(model, metric, pairs, steps, seed, mi_brdfs's version): the same command resumes where the
+sweep stopped, and one that changes nothing recomputes nothing.
 """
 
 from __future__ import annotations
 
-import concurrent.futures
 import functools
 import hashlib
 import json
 import os
-import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
 
+from .. import runner
 from .._version import __version__
-from ..errors import MiBrdfsError
+from ..errors import MiBrdfsError, MiBrdfsWarning
 from ..imageio import atomic_path
 from ..markdown import md_table
+from ..measured import merl
 
 CACHE = ".sweep-cache"
 
@@ -67,14 +71,15 @@ def task_key(task: dict) -> str:
 
 
 def run_task(task: dict) -> dict:
-    """One task in a Python process of its own; its result (JSON) or MiBrdfsError."""
+    """One task in a Python process of its own (:func:`mi_brdfs.runner.run_command`): its
+    result (JSON), or MiBrdfsError with the process's last line of error."""
     env = dict(os.environ, MI_BRDFS_NO_PROGRESS="1")
-    proc = subprocess.run([sys.executable, "-m", "mi_brdfs.fit.sweep", json.dumps(task)],
-                          capture_output=True, text=True, env=env)
+    proc = runner.run_command([sys.executable, "-m", "mi_brdfs.fit.sweep", json.dumps(task)],
+                              env=env)
     lines = proc.stdout.strip().splitlines()
     if proc.returncode != 0 or not lines:
-        why = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-        raise MiBrdfsError(f"sweep: {task['model']} on {task['file']} failed: {why}")
+        why = (proc.stderr.strip().splitlines() or [f"exit status {proc.returncode}, no output"])
+        raise MiBrdfsError(why[-1].split("Error: ", 1)[-1])
     return json.loads(lines[-1])
 
 
@@ -96,40 +101,74 @@ def _task_main(text: str) -> int:
     return 0
 
 
-def _run_all(todo: list, workers: int, scheduler: str | None, done: callable) -> None:
-    """Run the tasks ``todo``, calling ``done(task, result)`` as each finishes."""
-    if scheduler:
-        try:
-            from distributed import Client, as_completed
-        except ImportError:
-            raise MiBrdfsError("--scheduler needs dask.distributed: pip install "
-                               "'mi-brdfs[sweep]'") from None
-        with Client(scheduler) as client:
-            futures = {client.submit(run_task, t, pure=False): t for t in todo}
-            for future in as_completed(futures):
-                done(futures[future], future.result())
-        return
-    with concurrent.futures.ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(run_task, t): t for t in todo}
-        for future in concurrent.futures.as_completed(futures):
-            done(futures[future], future.result())
+def check_files(files) -> list[str]:
+    """
+    The files of a sweep, each once (by path, then by content: a repeat is a warning), as
+    absolute paths; every file there, readable and of a MERL file's size and dimensions, else
+    one MiBrdfsError naming each file that is not and why (its values are read in the fit).
+    """
+    kept, seen, bad = [], {}, []
+    for given in files:
+        path = str(Path(given).resolve())
+        why = _unusable(path)
+        if why:
+            bad.append(f"{given}: {why}")
+            continue
+        digest = file_digest(path)
+        first = seen.get(path) or seen.get(digest)
+        if first is not None:
+            same = "given twice" if seen.get(path) else f"the same content as {first}"
+            warnings.warn(MiBrdfsWarning(f"sweep: {given} is {same}: fitted and listed once"))
+            continue
+        seen[path] = seen[digest] = str(given)
+        kept.append(path)
+    if bad:
+        head = f"{len(bad)} of {len(files)} files are not MERL files a fit can read: " \
+            if len(bad) > 1 else ""
+        raise MiBrdfsError(f"sweep: {head}" + "; ".join(bad) + " (no fit started)")
+    return kept
+
+
+def _unusable(path: str) -> str | None:
+    """Why ``path`` is no MERL file a fit can read, from its size and its 12-byte header (None:
+    it looks like one)."""
+    try:
+        with open(path, "rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            head = f.read(12)
+    except OSError as e:
+        return f"cannot read the MERL file ({e.strerror or e})"
+    if len(head) < 12:
+        return f"{size} bytes, too short for a MERL file"
+    dims = tuple(int(v) for v in np.frombuffer(head, dtype="<i4"))
+    if dims != merl.RES:
+        return f"dimensions {dims}, not MERL's {merl.RES} (θh, θd, φd): not a MERL .binary file"
+    if size != merl.SIZE:
+        return f"{size} bytes where a MERL file has {merl.SIZE}: truncated or padded"
+    return None
 
 
 def sweep(files, models: list, metric: str, out, *, pairs: int = 16384, steps: int = 800,
           seed: int = 0, workers: int | None = None, scheduler: str | None = None,
-          progress: bool = False) -> dict:
+          progress: bool = False, wait: float = runner.WORKER_WAIT) -> dict:
     """
     Every model of ``models`` fitted to every MERL file of ``files`` under ``metric``; the
     merged table in ``out`` (``sweep.md``, ``sweep.json``). Returns {'results': {(file,
-    model): result}, 'computed': tasks run now, 'written': paths}.
-    """
-    from ..progress import Progress
+    model): result}, 'computed': fits run now, 'cached': fits taken from the cache, 'files':
+    the files fitted (absolute, each once), 'written': paths}.
 
+    The scheduler's address and the files are checked before anything else; a fit that fails
+    is one line on stderr and the others go on (then one MiBrdfsError); Ctrl-C or SIGTERM
+    raises :class:`mi_brdfs.runner.Interrupted`. Every finished fit is in the cache either way.
+    ``wait``: seconds to wait for the first worker of a Dask scheduler that has none.
+    """
+    address = runner.scheduler_address(scheduler) if scheduler else None
+    files = check_files(files)
     out = Path(out)
     cache = out / CACHE
     cache.mkdir(parents=True, exist_ok=True)
-    tasks = [dict(file=str(Path(f).resolve()), model=m, metric=metric, pairs=pairs, steps=steps,
-                  seed=seed) for f in files for m in models]
+    tasks = [dict(file=f, model=m, metric=metric, pairs=pairs, steps=steps, seed=seed)
+             for f in files for m in models]
     results, todo = {}, []
     for t in tasks:
         path = cache / f"{task_key(t)}.json"
@@ -137,22 +176,23 @@ def sweep(files, models: list, metric: str, out, *, pairs: int = 16384, steps: i
             results[(t["file"], t["model"])] = json.loads(path.read_text())
         else:
             todo.append(t)
-    bar = Progress(len(todo), label="sweep", unit=" fits") if progress and todo else None
 
-    def done(task, result):
+    def keep(task, result):
         with atomic_path(cache / f"{task_key(task)}.json", ".json") as tmp:
             Path(tmp).write_text(json.dumps(result))
         results[(task["file"], task["model"])] = result
-        if bar is not None:
-            bar.update(len(results) - (len(tasks) - len(todo)))
 
-    try:
-        _run_all(todo, workers or os.cpu_count() or 1, scheduler, done)
-    finally:
-        if bar is not None:
-            bar.close()
+    failures = runner.run(todo, run_task, workers=workers, scheduler=address, on_done=keep,
+                          describe=lambda t: f"{t['model']} on {t['file']}", label="sweep",
+                          unit=" fits", keep=f"{cache} (the same command resumes from there)",
+                          progress=progress, wait=wait)
+    if failures:
+        raise MiBrdfsError(f"sweep: {len(failures)} of {len(todo)} fits failed (each above); "
+                           f"the {len(todo) - len(failures)} finished are kept in {cache}, and "
+                           f"the same command computes only the rest")
     written = write_table(results, files, models, metric, out)
-    return {"results": results, "computed": len(todo), "written": written}
+    return {"results": results, "computed": len(todo), "cached": len(tasks) - len(todo),
+            "files": files, "written": written}
 
 
 def merged(results: dict, files, models: list, metric: str) -> tuple[list, dict]:

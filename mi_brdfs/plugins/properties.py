@@ -12,7 +12,9 @@ model.
 
 from __future__ import annotations
 
+import difflib
 import math
+import re
 
 import drjit as dr
 import mitsuba as mi
@@ -336,6 +338,49 @@ def preset(props, plugin: str) -> None:
     given = [key for key in props.keys() if key != "preset"]
     for name, entry in presets.missing(plugin, value, given).items():
         props[name] = mi.ScalarColor3f(*entry) if isinstance(entry, tuple) else entry
+
+
+#: A row of a ``.. pluginparameters::`` table: its first cell, the names it documents.
+_PARAMETER_ROW = re.compile(r"^\s*\*\s+-\s+(.+?)\s*$")
+
+
+def documented(doc: str) -> list[str]:
+    """The parameter names of a plugin's docstring: the first cell of each row of its
+    ``.. pluginparameters::`` table, split at commas (``alpha, alpha_u, alpha_v``; a numbered
+    parameter as ``exponent_i``), as the plugin reference shows them."""
+    table = doc.partition(".. pluginparameters::")[2]
+    return [name.strip() for m in map(_PARAMETER_ROW.match, table.splitlines()) if m
+            for name in m.group(1).split(",")]
+
+
+def check_all_read(props, plugin: str, doc: str) -> None:
+    """
+    Refuse, in one line, a property the plugin did not read, which Mitsuba would report after
+    the constructor as an "unreferenced property" of an "unknown plugin" (its wording for a
+    Python plugin in a variant other than the first), with no hint: the line names the plugin,
+    the property and the closest of the plugin's documented parameters (:func:`documented`),
+    or lists them where none is close; it keeps Mitsuba's term, which its built-ins use. A
+    documented parameter left unread is unused with the others given.
+    """
+    unread = list(props.unqueried())
+    if not unread:
+        return
+    name, known = unread[0], documented(doc)
+    index = re.search(r"_([0-9]+)$", name)  # lafortune's exponent_1 for its exponent_i
+    if index:
+        known = [k[:-1] + index.group(1) if k.endswith("_i") else k for k in known]
+    close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
+    allowed = f"an unreferenced property in {plugin}, which "
+    if name in known:
+        allowed += "does not use it with the other parameters given"
+    elif close:
+        options = " or ".join([", ".join(close[:-1]), close[-1]] if len(close) > 1 else close)
+        allowed += f"has no such parameter; did you mean {options}?"
+    else:
+        allowed += f"has no such parameter; its parameters: {', '.join(known)}"
+    if len(unread) > 1:
+        allowed += f" (also unreferenced: {', '.join(unread[1:])})"
+    raise ParameterError(plugin, name, props[name], allowed)
 
 
 def reject(props, plugin: str, name: str, hint: str) -> None:

@@ -16,14 +16,23 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..errors import MiBrdfsError, MiBrdfsWarning
+from ..registry import PLUGINS
 from .edit import (
     _as_dict, _diffuse_of, _drop, _from_spec, _params, _retyped, _set, _substituted, _zero,
 )
 from .measure import _key
 from .scene import Material
 
-#: Our plugins: the materials with candidates.
-OURS = ("lambert", "phong", "cooktorrance", "ward", "orennayar", "ashikhmin", "lafortune")
+#: Our plugins (:data:`mi_brdfs.registry.PLUGINS`): the materials simplify finds candidates for.
+OURS = tuple(PLUGINS)
+
+#: Our plugins for which no candidate applies in any configuration, and why.
+NO_CANDIDATES = {
+    "merl": "measured data, which no switch, lobe left out or built-in reproduces, and no "
+            "model is fitted to it here",
+    "he": "no switch, lobe left out or built-in is offered for He et al.'s model, and no "
+          "model is fitted to it here",
+}
 
 #: A ``lafortune`` lobe property: its kind, "_", the lobe's index (as the plugin reads them).
 _LOBE_PROPERTY = re.compile(r"^(cx|cy|cz|exponent|specular_reflectance)_(0|[1-9][0-9]*)$")
@@ -292,6 +301,9 @@ def kept_reason(material: Material, fits: bool) -> str:
     if kind not in OURS:
         return (f"{kind} is not a plugin of mi_brdfs ({', '.join(OURS)}): simplify has no "
                 f"candidates for it")
+    if kind in NO_CANDIDATES:
+        return (f"simplify has no candidates for {kind} ({NO_CANDIDATES[kind]}): fit models "
+                f"to it with mi-brdfs fit TARGET --models all and try the best in the scene")
     reason = "no cheaper candidate applies to this configuration" + ("" if fits else
                                                                        " (fits off)")
     named = [ref for ref, name in material.refs if name]
@@ -338,24 +350,17 @@ NOT_OFFERED = "fit not offered"
 
 
 def _fit(target: dict, model: dict, free, sizes: dict):
-    """(fitted spec, residual, albedo error) of :func:`mi_brdfs.fit.fit`, in an AD variant; a
-    note why not (a str) for a fit with flags (:mod:`mi_brdfs.fit.flags`): a fit at a bound,
-    no better than the zero model or unphysical is no candidate."""
-    import drjit as dr
-    import mitsuba as mi
-
+    """(fitted spec, residual, albedo error) of :func:`mi_brdfs.fit.fit` (which fits in
+    ``llvm_ad_rgb`` from a variant without AD, and hands this variant back); a note why not
+    (a str) for a fit with flags (:mod:`mi_brdfs.fit.flags`): a fit at a bound, no better
+    than the zero model or unphysical is no candidate."""
     from ..fit import fit
-    from ..registry import llvm_usable
 
-    ad = dr.is_diff_v(mi.Float) and mi.is_rgb and not mi.is_polarized
-    if not ad and not llvm_usable():
-        raise MiBrdfsError("fits need llvm_ad_rgb, which this machine lacks")
-    # fit hands this variant back when it returns or raises; the plugins' warnings about the
-    # models it loads on the way (a start whose ρd + ks exceeds 1) are no news to the user:
-    # what matters about the fitted model is in its flags
+    # the plugins' warnings about the models it loads on the way (a start whose ρd + ks
+    # exceeds 1) are no news to the user: what matters about the fitted model is in its flags
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MiBrdfsWarning)
-        result = fit(target, model, free, variant=None if ad else "llvm_ad_rgb", **sizes)
+        result = fit(target, model, free, **sizes)
     if result.flags:
         return f"{NOT_OFFERED}: " + "; ".join(result.flags)
     return result.spec, result.residual, result.albedo_error
@@ -364,7 +369,8 @@ def _fit(target: dict, model: dict, free, sizes: dict):
 def _cached_fit(store, fit_sizes: dict):
     """
     The ``fit_fn(target, model, free)`` of :func:`candidates_for`: :func:`_fit` with
-    ``fit_sizes`` (in llvm_ad_rgb where the current variant has no AD), its result (or the note why it failed) stored in ``store``.
+    ``fit_sizes`` (in llvm_ad_rgb where the current variant has no AD), its result (or the
+    note why it failed) stored in ``store``.
     """
     from .._version import __version__
 

@@ -141,7 +141,7 @@ def test04_quick_audit_as_a_user_runs_it(tmp_path):
     assert (tmp_path / "MITSUBA_AUDIT-quick.md").is_file()
     cached = len(list((tmp_path / "audit" / ".cache").glob("*.json")))
     assert cached == sum(c.quick and c.bsdf in only for c in grid.all_cases()) == 2
-    p = subprocess.run(cmd + ["--only", "roughplastic"], capture_output=True, text=True,
+    p = subprocess.run(cmd + ["--only", "roughplastic", "--force"], capture_output=True, text=True,
                        env=env, timeout=120)
     assert p.returncode == 0 and "defect" in p.stdout, p.stdout + p.stderr
 

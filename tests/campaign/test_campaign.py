@@ -37,7 +37,8 @@ def test01b_only_names_sections(tmp_path, capsys):
     readme.write_text("x")
     assert main(["validate", "--only", "lambert", "--readme", str(readme),
                  "--out", str(tmp_path)]) == 2
-    assert "--only with --readme" in capsys.readouterr().err
+    assert "validate: --readme goes with the whole run (no --only); this is a partial run " \
+        "(--only)" in capsys.readouterr().err
     assert not list(tmp_path.glob("*REPORT*")) and readme.read_text() == "x"
 
 

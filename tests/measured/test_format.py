@@ -232,3 +232,70 @@ def test10_noise_model():
     assert add_noise(values) is values
     with pytest.raises(MiBrdfsError, match="relative noise must be finite and ≥ 0, not -0.1"):
         add_noise(values, -0.1)
+
+
+#: BSDFs no MERL table describes, and what measure's one line says of each.
+UNMEASURABLE = [
+    ("conductor", "conductor has no diffuse or glossy reflection"),
+    ("dielectric", "dielectric has no diffuse or glossy reflection"),
+    ({"type": "lambert", "reflectance": {"type": "checkerboard"}},
+     "has a parameter that varies over the surface, reflectance (Checkerboard)"),
+    ({"type": "twosided", "bsdf": {"type": "roughconductor", "alpha": {
+        "type": "mesh_attribute", "name": "vertex_color"}}},
+     "varies over the surface, brdf_0.alpha (MeshAttribute); MERL's format holds one BRDF"),
+    ("diffuse reflectance=0", "is 0 at every bin above the horizon"),
+    ("roughdielectric specular_reflectance=0", "is 0 at every bin above the horizon"),
+]
+
+
+@pytest.mark.parametrize("spec,message", UNMEASURABLE)
+def test11_what_no_table_holds_is_refused_before_writing(variant_llvm_ad_rgb, tmp_path, spec,
+                                                          message):
+    """A delta BSDF once wrote a 35 MB file of zeros, and a textured one a table of the
+    texture at one point, both with exit 0: each is one line now, and nothing is written."""
+    path = tmp_path / "m.binary"
+    with pytest.raises(MiBrdfsError) as info:
+        measure(spec, path)
+    assert message in str(info.value) and "\n" not in str(info.value)
+    assert not path.exists()
+
+
+def test12_measure_hands_the_callers_variant_back(variant_scalar_rgb, tmp_path, monkeypatch):
+    """measure() from scalar_rgb measures in llvm_ad_rgb and sets scalar_rgb again (it once
+    left llvm_ad_rgb set, and the caller's next mi.render of a scene it had loaded failed
+    with a bare AssertionError), also when it raises; the CLI refuses a delta BSDF too."""
+    import mitsuba as mi
+
+    from conftest import LLVM_OK
+
+    if not LLVM_OK:
+        pytest.skip("no working libLLVM")
+    film = {"type": "hdrfilm", "width": 8, "height": 8}
+    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"},
+                          "sensor": {"type": "perspective", "film": film},
+                          "emitter": {"type": "constant"}, "shape": {"type": "sphere"}})
+    values = measure("diffuse reflectance=0.5")
+    assert mi.variant() == "scalar_rgb"
+    assert np.nanmax(values) == pytest.approx(0.5 / np.pi, rel=1e-5)
+    with pytest.raises(MiBrdfsError):
+        measure("conductor")
+    assert mi.variant() == "scalar_rgb"
+    assert np.all(np.isfinite(np.array(mi.render(scene, spp=1))))
+    monkeypatch.chdir(tmp_path)
+    cli_one_line_error(["measure", "conductor", "-o", "c.binary"],
+                       "conductor has no diffuse or glossy reflection")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test13_what_the_table_leaves_out_is_said(variant_llvm_ad_rgb):
+    """plastic's delta coating and roughdielectric's transmission have no place in a BRDF
+    table: their diffuse or glossy reflection is tabulated, and a warning says what is not
+    (it was left out without a word)."""
+    from mi_brdfs.errors import MiBrdfsWarning
+
+    for spec, what in (("plastic", "also has a delta reflection"),
+                       ("roughdielectric alpha=0.3", "also has transmission")):
+        with pytest.warns(MiBrdfsWarning, match=f"measure: .* {what}, which the table of its "
+                                                f"BRDF leaves out"):
+            values = measure(spec)
+        assert np.nanmax(values) > 0

@@ -85,3 +85,77 @@ def test05_material_none_is_a_perfect_conductor(variants_rgb, np_rng):
     np.testing.assert_allclose(a, eval_pdf(unit, wi, wo)[0], rtol=1e-5, atol=1e-7)
     with pytest.raises(RuntimeError, match=r'"material" = "nothing" is invalid: .* or none'):
         mi.load_dict({"type": "cooktorrance", "material": "nothing"})
+
+
+def _one_line(load) -> str:
+    """The one line a loader's error becomes (as the CLI and bsdfspec show it)."""
+    from mi_brdfs.errors import mitsuba_error_line
+
+    with pytest.raises(RuntimeError) as info:
+        load()
+    return mitsuba_error_line(info.value)
+
+
+@pytest.mark.parametrize("plugin", list(mi_brdfs.PLUGINS))
+def test06_a_misspelt_parameter_names_the_closest(variants_rgb, plugin):
+    """A parameter of ours misspelt (its two last letters swapped), from a dict and from XML,
+    in both variants: one line naming the plugin, the parameter and the documented name it is
+    closest to, where Mitsuba said 'Found 1 unreferenced property in unknown plugin of type'
+    (in the variant registered second) without a suggestion."""
+    from helpers import spec as spec_of
+
+    from mi_brdfs.plugins.properties import documented
+
+    right = documented(mi_brdfs.plugin_class(plugin).__doc__)[0]
+    wrong = right[:-2] + right[-1] + right[-2]
+    spec = dict(spec_of(plugin), **{wrong: 0.25})
+    xml = "".join(f'<string name="{k}" value="{v}"/>' for k, v in spec_of(plugin).items()
+                  if k != "type")
+    xml = (f'<bsdf version="3.0.0" type="{plugin}">{xml}<float name="{wrong}" value="0.25"/>'
+           f'</bsdf>')
+    for load in (lambda: mi.load_dict(spec), lambda: mi.load_string(xml)):
+        text = _one_line(load)
+        assert f'{plugin}: parameter "{wrong}" = 0.25 is invalid: an unreferenced property in ' \
+               f'{plugin}, which has no such parameter; did you mean {right}' in text, text
+        assert "unknown plugin" not in text, text
+
+
+def test07_an_unknown_parameter_lists_the_plugins_parameters(variant_llvm_ad_rgb, tmp_path,
+                                                             monkeypatch):
+    """No close name: the line lists the plugin's parameters; the command line says the same
+    (it said 'unknown plugin of type "cooktorrance"')."""
+    from helpers import cli_one_line_error
+
+    text = _one_line(lambda: mi.load_dict({"type": "ward", "zzz": 1.0, "qqq": 2.0}))
+    assert text.endswith('ward: parameter "zzz" = 1 is invalid: an unreferenced property in '
+                         'ward, which has no such parameter; its parameters: alpha, alpha_u, '
+                         'alpha_v, specular_reflectance, diffuse_reflectance, form, preset '
+                         '(also unreferenced: qqq)'), text
+    monkeypatch.chdir(tmp_path)
+    cli_one_line_error(["check", "cooktorrance", "alpah=0.2", "--quick"],
+                       'cooktorrance: parameter "alpah" = 0.2 is invalid: an unreferenced '
+                       'property in cooktorrance, which has no such parameter; did you mean '
+                       'alpha, alpha_v or alpha_u?')
+    text = _one_line(lambda: mi.load_dict({"type": "lafortune", "exponnet_1": 3.0}))
+    assert "lafortune, which has no such parameter; did you mean exponent_1 or exponent_0?" \
+        in text, text
+
+
+def test08_a_documented_parameter_left_unread_is_not_called_unknown(variant_scalar_rgb):
+    """check_all_read on its own: a property the docstring's table documents but the plugin
+    left unread is unused with the others given, not "no such parameter; did you mean" itself;
+    every property read, nothing is said."""
+    from mi_brdfs.errors import ParameterError
+    from mi_brdfs.plugins.properties import check_all_read
+
+    doc = "Doc.\n\n    .. pluginparameters::\n\n     * - alpha, beta\n       - |float|\n"
+    props = mi.Properties("demo")
+    props["beta"] = 0.5
+    with pytest.raises(ParameterError, match=r'^demo: parameter "beta" = 0.5 is invalid: an '
+                                             r'unreferenced property in demo, which does not '
+                                             r'use it with the other parameters given$'):
+        check_all_read(props, "demo", doc)
+    props = mi.Properties("demo")
+    props["alpha"] = 0.5
+    assert props["alpha"] == 0.5  # read
+    check_all_read(props, "demo", doc)
