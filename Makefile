@@ -16,7 +16,7 @@ PYTEST_ARGS ?=
 # The documents whose quoted figures make validate and make bench fill in from their reports
 QUOTING := $(foreach f,README.md $(wildcard docs/*.md),--readme $(f))
 
-.PHONY: all setup system render test bench validate audit figures docs gallery clean distclean
+.PHONY: all setup system render test test-full bench validate audit figures docs gallery clean distclean
 
 all: test
 
@@ -41,9 +41,14 @@ render: $(STAMP)
 # pytest exits 5 when it collected no test: that is a broken suite, not a pass. Two worker
 # processes (pytest-xdist), one per core of a 2-core machine; PYTEST_ARGS="-n 8" uses more.
 test: $(STAMP)
-	@$(PY) -m pytest -n 2 $(PYTEST_ARGS); rc=$$?; \
+	@$(PY) -m pytest -n 2 -m "not slow" $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "make test: pytest collected no tests (exit 5)"; exit 1; fi; \
 	exit $$rc
+
+# The tests marked slow as well: the plugin matrix's every cell in every llvm variant (about
+# 5 min more on 2 cores with an empty kernel cache)
+test-full: $(STAMP)
+	@$(PY) -m pytest -n 2 $(PYTEST_ARGS)
 
 bench: $(STAMP)
 	$(VENV)/bin/mi-brdfs bench --out validation --force $(QUOTING)

@@ -357,3 +357,38 @@ def test14_he_differs_from_bbm_in_its_blend_alone(variant_llvm_ad_rgb):
     big = want > 1e-3 * want.max()
     worst = np.max(np.abs(value[big] / want[big] - 1.0))
     assert band.sum() > 100 and 1e-3 < worst <= 0.15, (band.sum(), worst)
+
+
+def test15_a_he_preset_warns_of_what_the_plugin_adds_not_of_the_users_values(
+        variant_scalar_rgb):
+    """Ngan et al.'s He fits keep A·ρ_dd + ρd/π under 1, but their A (a factor, up to 7470,
+    making up for Fresnel's reflectance at an index near 1) also scales the coherent delta
+    the plugin adds. A preset once warned "diffuse_reflectance + specular_reflectance
+    reaches 7470.5 > 1 ... values kept" about values the user never set, and the same of
+    colonial-maple-223, whose albedo stays under 1 everywhere. Now: no warning where the
+    preset's delta stays under 1, one naming the preset and the delta's largest weight where
+    it does not (the delta's sample weight at 89°, computed apart), and the usual one where
+    the scene gives a value itself."""
+    import warnings
+
+    from mi_brdfs.errors import MiBrdfsWarning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MiBrdfsWarning)
+        mi.load_dict({"type": "he", "preset": "ngan:colonial-maple-223"})
+    with pytest.warns(MiBrdfsWarning) as record:
+        bsdf = mi.load_dict({"type": "he", "preset": "ngan:red-phenolic"})
+    messages = [str(w.message) for w in record]
+    assert len(messages) == 1 and messages[0].startswith(
+        "he: preset ngan:red-phenolic: the fit's specular_reflectance A (up to 7470) also "
+        "scales the coherent delta, which the fitted model has not: the delta reflects up "
+        "to "), messages
+    shown = float(re.search(r"reflects up to ([0-9.e+]+) of the light at θi = 89°",
+                            messages[0])[1])
+    si = mi.SurfaceInteraction3f()
+    si.wi = mi.Vector3f(np.sin(np.radians(89.0)), 0.0, np.cos(np.radians(89.0)))
+    ctx = mi.BSDFContext(mi.TransportMode.Radiance, mi.BSDFFlags.DeltaReflection)
+    _, weight = bsdf.sample(ctx, si, 0.5, mi.Point2f(0.5, 0.5))
+    assert shown == pytest.approx(max(np.array(weight)), rel=1e-3)
+    with pytest.warns(MiBrdfsWarning, match="diffuse_reflectance \\+ specular_reflectance"):
+        mi.load_dict({"type": "he", "preset": "ngan:colonial-maple-223",
+                      "diffuse_reflectance": 0.5})

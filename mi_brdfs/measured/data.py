@@ -16,14 +16,25 @@ from ..errors import MiBrdfsError
 from . import merl, warp
 
 
+class Unmeasured(NamedTuple):
+    """How many bins are unmeasured in every channel, and how many in some channels only,
+    with how many of those each channel misses."""
+
+    every: int
+    some: int
+    red: int
+    green: int
+    blue: int
+
+
 class Measured(NamedTuple):
     """One MERL file, ready for the plugin."""
 
     #: f per bin, (90·90·180, 3) float32 in flat bin order, unmeasured bins 0.
     rgb: np.ndarray
-    #: How many bins are unmeasured although both directions at their centre lie above the
-    #: surface (those below it are unmeasured in every file and never looked up alone).
-    unmeasured: int
+    #: The bins unmeasured although both directions at their centre lie above the surface
+    #: (those below it are unmeasured in every file and never looked up alone).
+    unmeasured: Unmeasured
     #: The sampler's density and its θi nodes (:func:`.warp.density`).
     density: np.ndarray
     thetas: list
@@ -53,7 +64,11 @@ def _above() -> np.ndarray:
 @functools.lru_cache(maxsize=8)
 def _load(path: str, mtime_ns: int, size: int) -> Measured:
     values = merl.read(path)
-    unmeasured = int((np.isnan(values[0]) & _above()).sum())
+    missing = np.isnan(values) & _above()
+    every = missing.all(axis=0)
+    some = missing.any(axis=0) & ~every
+    unmeasured = Unmeasured(int(every.sum()), int(some.sum()),
+                            *(int((m & some).sum()) for m in missing))
     values = np.nan_to_num(values, nan=0.0)
     density, thetas, _ = warp.density(lambda wi, wo: merl.interpolate(values, wi, wo).mean(axis=-1))
     rgb = np.moveaxis(values, 0, -1).reshape(-1, 3).astype(np.float32)

@@ -8,12 +8,15 @@ the sampler of measured data (:class:`mi_brdfs.measured.warp.Sampler`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import OrderedDict
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
+from ..errors import ParameterError
 from ..measured import warp
 from ..reference import he as reference
 from ..scattering import he as terms
@@ -26,10 +29,25 @@ PLUGIN = "he"
 #: fit or an optimisation moves σ0 and τ at every step).
 _samplers: OrderedDict = OrderedDict()
 KEPT = 16
+#: The phase variance g above which the sampler's density takes Beckmann's asymptote e^(−c/g)/g
+#: in place of a series summed to convergence (the ``paper`` reading's): that sum's cost grows
+#: as √g (hours at σ0 = 1000 µm), and above g = 1000 the asymptote differs from it by about
+#: 1/g, which a sampling density, whose pdf is exact whatever its shape, can spare.
+SAMPLER_ROUGH = 1e3
 
 
 #: Mitsuba's visible range (µm; MI_CIE_MIN, MI_CIE_MAX), into which a wavelength is clamped.
 VISIBLE = (0.36, 0.83)
+
+#: The ranges (µm) of σ0 and τ: refused outside them at load; a value set later through
+#: ``mi.traverse`` (an optimiser's step can leave them) is clipped into them where the lobes
+#: read it. τ ≥ 1 nm: a shorter autocorrelation length describes no surface of Gaussian
+#: heights (and τ = 0 makes the shadowing 0/0).
+SIGMA0_RANGE = (0.0, 1e3)
+TAU_RANGE = (1e-3, 1e4)
+#: The parameters the albedo depends on: a preset that gives them all is warned about as such.
+ENERGY_NAMES = ("sigma0", "tau", "eta", "k", "material", "specular_reflectance",
+                "diffuse_reflectance", "variant", "terms")
 
 
 def wavelengths(si):
@@ -50,6 +68,15 @@ def _representative(tex, default: float) -> float:
     return default if r is None else 0.5 * (r[0] + r[1])
 
 
+def _length(props, name: str, default: float, bounds: tuple[float, float]) -> float:
+    """A length in µm within ``bounds``; ParameterError naming the range and the unit."""
+    value = properties.number(props, PLUGIN, name, default)
+    if not bounds[0] <= value <= bounds[1]:
+        raise ParameterError(PLUGIN, name, value,
+                             f"must be within [{bounds[0]:g}, {bounds[1]:g}] (µm)")
+    return value
+
+
 class Surface:
     """The surface's parameters as the lobes use them: σ0 and τ (µm), the index η + ik
     (textures), the reading of the paper and the series' length."""
@@ -63,16 +90,29 @@ class Surface:
         """(λ, η, k) per channel at ``si``."""
         return wavelengths(si), self.eta.eval(si, active), self.k.eval(si, active)
 
+    def key(self) -> tuple:
+        """σ0, τ, a representative η and k, the reading and the series' length."""
+        return (properties.as_float(self.sigma0), properties.as_float(self.tau),
+                _representative(self.eta, 1.5), _representative(self.k, 0.0),
+                self.reading_name, self.count)
+
+    def model(self, reading=None) -> reference.HTSG:
+        """The float64 reference of this surface at the RGB wavelengths and a representative
+        index, in ``reading`` (a :class:`mi_brdfs.reference.he.Variant`; default: its own)."""
+        sigma0, tau, eta, k = self.key()[:4]
+        return reference.HTSG(sigma0, tau, wavelength=list(terms.RGB_WAVELENGTHS), eta=eta,
+                              k=k, variant=reading or self.reading_name,
+                              terms="variant" if self.count is None else self.count)
+
     def sampler(self) -> warp.Sampler:
-        """The directional diffuse lobe's sampler, built from the float64 reference at RGB
-        wavelengths and a representative index (shared by every instance of this surface)."""
-        key = (properties.as_float(self.sigma0), properties.as_float(self.tau),
-               _representative(self.eta, 1.5), _representative(self.k, 0.0),
-               self.reading_name, self.count)
+        """The directional diffuse lobe's sampler, built from the float64 reference (shared
+        by every instance of this surface)."""
+        key = self.key()
         if key not in _samplers:
-            model = reference.HTSG(key[0], key[1], wavelength=list(terms.RGB_WAVELENGTHS),
-                                   eta=key[2], k=key[3], variant=self.reading_name,
-                                   terms="variant" if self.count is None else self.count)
+            reading = reference.VARIANTS[self.reading_name]
+            if reading.terms is None and reading.rough_threshold is None and self.count is None:
+                reading = dataclasses.replace(reading, rough_threshold=SAMPLER_ROUGH)
+            model = self.model(reading)
             _samplers[key] = warp.Sampler(*warp.density(
                 lambda wi, wo: model.directional_diffuse(wi, wo).mean(axis=-1)))
             while len(_samplers) > KEPT:
@@ -143,12 +183,14 @@ class He(mi.BSDF):
 
      * - sigma0
        - |float|
-       - rms roughness σ0 of the surface's heights in µm, ≥ 0 (Default: 0.18)
+       - rms roughness σ0 of the surface's heights in µm, within [0, 1000] (Default: 0.18;
+         a value set through ``mi.traverse`` outside the range acts as its nearest end)
        - |exposed|, |differentiable|
 
      * - tau
        - |float|
-       - autocorrelation length τ of the heights in µm, > 0 (Default: 3)
+       - autocorrelation length τ of the heights in µm, within [0.001, 10000] (Default: 3;
+         a value set through ``mi.traverse`` outside the range acts as its nearest end)
        - |exposed|, |differentiable|
 
      * - material
@@ -188,7 +230,9 @@ class He(mi.BSDF):
        - A published fit that fills every parameter the scene does not give (explicit ones
          win): ``ngan:<material>``, Ngan et al. 2005's He fit to a MERL material (westin
          reading; ``specular_reflectance`` its albedo); docs/presets.md lists the materials,
-         the conversion and what differs from bbm's model (Default: none)
+         the conversion and what differs from bbm's model. The fit's own terms keep the
+         albedo under 1, but its albedo A, up to 7470, scales the coherent delta too: a
+         preset warns, naming itself, where that delta reflects more than 1 (Default: none)
 
     He, Torrance, Sillion & Greenberg (1991, "A Comprehensive Physical Model for Light
     Reflection", SIGGRAPH) derive reflection from Kirchhoff's scattering by a surface of
@@ -215,8 +259,11 @@ class He(mi.BSDF):
     numbers in the series, and takes Beckmann's rough-surface asymptote for g > 18.5; it is the
     only reading that tends to a Beckmann microfacet lobe of α = 2σ/τ as the surface roughens
     and keeps the albedo at most 1, and the one Ngan et al.'s (2005) fits used. ``paper`` is
-    the equations as printed (its albedo exceeds 1 by far on rough surfaces), ``holzschuch``
-    Holzschuch & Pacanowski's reading, the series cut at 10 terms.
+    the equations as printed, ``holzschuch`` Holzschuch & Pacanowski's reading, the series
+    cut at 10 terms. Both read v_xy in unit vectors, which makes the lobe (2π/λ)² times too
+    strong at any roughness: their albedo exceeds 1 from nearly smooth surfaces on, e.g. 6.3
+    for glass (the default index) at σ0 = 0.05 µm, τ = 3 µm and normal incidence, 1.4 for a
+    metal at σ0 = 0.002 µm (docs/models.md; the plugin warns at load).
 
     **The series.** Summed in logarithms over a window of ``terms`` consecutive orders (from
     m = 1; centred on m ≈ g for ``paper``): against the converged float64 series the window
@@ -255,11 +302,10 @@ class He(mi.BSDF):
 
     def __init__(self, props):
         super().__init__(props)
+        given = set(props.keys())  # what the scene gives, before the preset fills the rest
         properties.preset(props, PLUGIN)  # a preset's parameters, where the scene gives none
-        self.m_sigma0 = mi.Float(properties.number(props, PLUGIN, "sigma0", terms.DEFAULT_SIGMA0,
-                                                   0.0, 1e3))
-        self.m_tau = mi.Float(properties.number(props, PLUGIN, "tau", terms.DEFAULT_TAU, 0.0, 1e4,
-                                                lo_open=True))
+        self.m_sigma0 = mi.Float(_length(props, "sigma0", terms.DEFAULT_SIGMA0, SIGMA0_RANGE))
+        self.m_tau = mi.Float(_length(props, "tau", terms.DEFAULT_TAU, TAU_RANGE))
         self.m_eta, self.m_k, self.m_material = properties.ior(props, PLUGIN, None)
         self.m_specular_reflectance = properties.texture(props, PLUGIN, "specular_reflectance",
                                                          1.0, 0.0, math.inf)
@@ -271,12 +317,19 @@ class He(mi.BSDF):
             int(properties.number(props, PLUGIN, "terms", 1, 1, 4096))
         self.parameters_changed()
         self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
-        self._warn_energy(props, diffuse)
+        self._warn_energy(props, diffuse, given)
 
-    def _warn_energy(self, props, diffuse):
-        """Warn (values kept) where the albedo can exceed 1: the uniform diffuse term is added,
+    def _warn_energy(self, props, diffuse, given):
+        """
+        Warn (values kept) where the albedo can exceed 1: the uniform diffuse term is added,
         not coupled, and the ``paper`` and ``holzschuch`` readings' directional diffuse term
-        alone exceeds 1 on rough surfaces (its albedo tabulated at the RGB wavelengths)."""
+        alone exceeds 1 from nearly smooth surfaces on (its albedo tabulated at the RGB
+        wavelengths). Where a preset gives every value the albedo depends on (``given``: the
+        names the scene gives), :meth:`_warn_preset` says what the preset does instead.
+        """
+        if "preset" in given and not given & set(ENERGY_NAMES):
+            self._warn_preset(props)
+            return
         properties.warn_sum(props, PLUGIN, ("diffuse_reflectance", diffuse),
                             ("specular_reflectance", self.m_specular_reflectance),
                             "the uniform diffuse term is added, not coupled, so the albedo "
@@ -288,10 +341,33 @@ class He(mi.BSDF):
         peak *= 1.0 if factor is None else float(max(factor))
         if peak > 1.0 + 1e-3:
             why = ("specular_reflectance included" if self.m_variant == "westin" else
-                   "only westin's reading keeps it under 1 on rough surfaces")
+                   "only westin's reading keeps it under 1: with v_xy read in unit vectors "
+                   "the lobe is (2π/λ)² times too strong, smooth or rough")
             properties.warn(PLUGIN, f"the directional diffuse term's albedo reaches {peak:.3g}"
                                     f" > 1 in the {self.m_variant} reading ({why}); values "
                                     f"kept")
+
+    def _warn_preset(self, props):
+        """
+        A preset's values are the published fit's, whose own terms, A·ρ_dd + ρd/π, reflect
+        at most 0.48 of the light in every fit (docs/presets.md): no warning about them. What
+        the plugin adds, He et al.'s coherent delta, is scaled by the fit's A as well, up to
+        7470 where A makes up for the Fresnel reflectance of an index near 1: warn, naming the
+        preset, where its weight A·ρ_s exceeds 1 at some θi ≤ 89° (the reference's ρ_s at the
+        RGB wavelengths).
+        """
+        factor = np.asarray(properties.upper_bound(props, "specular_reflectance",
+                                                   self.m_specular_reflectance))
+        theta = np.radians(np.arange(90.0))
+        wi = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)
+        weight = self.lobes.lobes[0].surface.model().specular(wi) * factor
+        if weight.max() > 1.0 + 1e-3:
+            angle = int(np.unravel_index(np.argmax(weight), weight.shape)[0])
+            properties.warn(PLUGIN, f"preset {props['preset']}: the fit's specular_reflectance "
+                                    f"A (up to {factor.max():.4g}) also scales the coherent "
+                                    f"delta, which the fitted model has not: the delta "
+                                    f"reflects up to {weight.max():.4g} of the light at θi = "
+                                    f"{angle}°; values kept as published (docs/presets.md)")
 
     sample, eval, pdf, eval_pdf = lobes.sample, lobes.eval, lobes.pdf, lobes.eval_pdf
     eval_diffuse_reflectance = lobes.eval_diffuse_reflectance
@@ -301,8 +377,10 @@ class He(mi.BSDF):
         the kernel's inputs, not its code), and the directional diffuse lobe's sampler for
         them."""
         dr.make_opaque(self.m_sigma0, self.m_tau)
-        surface = Surface(self.m_sigma0, self.m_tau, self.m_eta, self.m_k, self.m_variant,
-                          self.m_terms)
+        # values set through mi.traverse are not checked: clipped into the accepted ranges
+        surface = Surface(properties.clip(self.m_sigma0, *SIGMA0_RANGE),
+                          properties.clip(self.m_tau, *TAU_RANGE), self.m_eta, self.m_k,
+                          self.m_variant, self.m_terms)
         factor = self.m_specular_reflectance
         diffuse = [lobes.Diffuse(self.m_diffuse_reflectance, component=2)] \
             if self.m_diffuse_reflectance is not None else []

@@ -131,6 +131,18 @@ class Measured(lobes.TabulatedLobe):
         return mi.Float(1.0)  # one lobe: the mixture never weighs it
 
 
+def unmeasured_text(measured: data.Measured) -> str:
+    """How many bins above the horizon are unmeasured: in every channel, and in some channels
+    only, with how many of those each channel misses (its value is 0 there, the measured
+    channels are used)."""
+    u, total = measured.unmeasured, measured.rgb.shape[0]
+    text = f"{u.every} of {total} bins unmeasured in every channel"
+    if u.some:
+        text += (f", {u.some} more in some channels only (red {u.red}, green {u.green}, "
+                 f"blue {u.blue})")
+    return text + "; an unmeasured value is evaluated as 0"
+
+
 class Merl(mi.BSDF):
     r"""
     .. _bsdf-merl:
@@ -165,8 +177,9 @@ class Merl(mi.BSDF):
 
     f interpolated trilinearly in the bins' coordinates (√θh, θd, φd; clamped to the first and
     last bins in θh and θd, periodic in φd), which keeps it reciprocal: swapping ωi and ωo
-    turns φd by π. An unmeasured bin (a negative entry) counts as 0; the plugin warns how many
-    there are. It is one-sided (0 for either direction below the surface) and has one glossy
+    turns φd by π. An unmeasured value (a negative entry) counts as 0, in its channel alone;
+    the plugin warns how many bins are unmeasured in every channel and how many in some
+    channels only, per channel. It is one-sided (0 for either direction below the surface) and has one glossy
     component, as Mitsuba's ``measured``.
 
     **Sampling.** ωo is drawn through the half vector from a density tabulated per incident
@@ -213,9 +226,8 @@ class Merl(mi.BSDF):
         if measured.stamp not in _tables:
             _tables[measured.stamp] = Table(measured)
         self.table = _tables[measured.stamp]
-        if measured.unmeasured:
-            properties.warn(PLUGIN, f"{self.filename}: {measured.unmeasured} of "
-                            f"{measured.rgb.shape[0]} bins unmeasured, evaluated as 0")
+        if measured.unmeasured.every or measured.unmeasured.some:
+            properties.warn(PLUGIN, f"{self.filename}: {unmeasured_text(measured)}")
         self.parameters_changed()
 
     def parameters_changed(self, keys=None):

@@ -60,8 +60,9 @@ The series (:func:`series`) is summed to convergence: its terms are log-concave 
 on, so once they decrease, the tail after term m is at most t_m r/(1 − r) with r = t_m/t_{m−1}
 (:func:`tail_bound`), and the sum stops where that is below 1e-16 of the sum (:data:`RTOL`);
 terms below m = g − 12√g − 12 are skipped (Poisson's lower tail: below 1e-20 of the sum for
-g ≤ 10⁶). ``terms`` cuts it at a fixed count instead, :func:`terms_needed` gives the count a
-tolerance needs. The equation numbers are those Westin's code and bbm cite; the printed paper
+g ≤ 10⁶), and those below m = c/800, each under e^(−800), beyond float64's range.
+``terms`` cuts it at a fixed count instead, :func:`terms_needed` gives the count a tolerance
+needs. The equation numbers are those Westin's code and bbm cite; the printed paper
 was not at hand to check them against.
 """
 
@@ -194,7 +195,10 @@ def series(g, c, terms: int | None = None, rtol: float = RTOL) -> np.ndarray:
         return out.reshape(shape)
     g, c = g[idx], c[idx]
     converge = terms is None
-    m0 = np.maximum(1.0, np.floor(g - 12.0 * np.sqrt(g) - 12.0)) if converge else np.ones_like(g)
+    # skipped: Poisson's lower tail, and the terms under e^(−c/m) < e^(−800), below float64's
+    # range (with τ = 10⁴ µm, c reaches 10⁹ and the terms would rise for 10⁴ orders)
+    m0 = np.maximum(np.maximum(1.0, np.floor(g - 12.0 * np.sqrt(g) - 12.0)),
+                    np.floor(c / 800.0)) if converge else np.ones_like(g)
     log_g = np.log(g)
     log_p = m0 * log_g - g - _lgamma(m0 + 1.0)  # ln of Poisson's pmf at m
     scale = np.full(g.size, -np.inf)  # ln of the largest term so far

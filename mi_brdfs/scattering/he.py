@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import drjit as dr
 
 from .fresnel import exact as fresnel_exact
+from .stable import log1p
 
 #: The wavelengths (µm) RGB variants evaluate the wave-optical terms at, red, green, blue: those
 #: of bsdfbenchmark/bbm's RGB configuration (backbone/*/include/backbone.h,
@@ -78,16 +79,18 @@ def shadowing(cos_theta, sigma0, tau, errata: bool):
     a = dr.select(ok, tau * c / dr.select(ok, 2.0 * sigma0 * s, 1.0), 1.0)
     e = _erfc(a)
     damp = dr.exp(-a * a) if errata else 1.0
-    lam = 0.5 * (damp / (math.sqrt(math.pi) * a) - e)
+    # a → 0 (τ → 0): Λ → ∞ and S → 0; the floor keeps Python floats from dividing by 0
+    lam = 0.5 * (damp / (math.sqrt(math.pi) * dr.maximum(a, 1e-30)) - e)
     value = (1.0 - 0.5 * e) / (1.0 + lam)
     return dr.select(c > 0, dr.select(ok, value, 1.0), 0.0)
 
 
 def _k(cos_theta, sigma0, tau):
-    """K = tanθ erfc(τ cotθ/(2σ0)) (Eqs. 82-83): 0 at normal incidence."""
+    """K = tanθ erfc(τ cotθ/(2σ0)) (Eqs. 82-83): 0 at normal incidence and for σ0 = 0
+    (erfc(∞) = 0)."""
     c = dr.maximum(cos_theta, 1e-12)
     t = dr.safe_sqrt(1.0 - c * c) / c
-    ok = t > 0
+    ok = (t > 0) & (sigma0 > 0)  # both factors: Python floats divide before the select
     return dr.select(ok, t * _erfc(tau / dr.select(ok, 2.0 * sigma0 * t, 1.0)), 0.0)
 
 
@@ -111,13 +114,28 @@ def effective_roughness(cos_i, cos_o, sigma0, tau):
     return sigma0 * dr.rsqrt(1.0 + x * x)
 
 
+def log_poisson(m, g, log_g):
+    """
+    ln(g^m e^(−g)/m!) for m ≥ 1. Where m > 16, by Stirling's series for ln m! with the large
+    terms cancelled analytically, (m − g) − m ln(1 + (m − g)/g) − ½ ln(2πm) − 1/(12m) +
+    1/(360m³) (its error below 1/(1260m⁵)): the direct m ln g − g − ln Γ(m + 1) subtracts
+    numbers of size g ln g, which float32 holds to g ln g · 6·10⁻⁸ — 5·10⁻⁵ at g = 160 and
+    beyond e^88, an infinite term, at g = 10⁸ (σ0 ≈ 500 µm).
+    """
+    direct = m * log_g - g - dr.lgamma(m + 1.0)
+    d = m - g
+    stirling = d - m * log1p(d / dr.maximum(g, 1e-30)) - 0.5 * dr.log(2.0 * math.pi * m) - \
+        1.0 / (12.0 * m) + 1.0 / (360.0 * m * m * m)
+    return dr.select(m > 16.0, stirling, direct)
+
+
 def series(g, c, terms: int, centred: bool):
     """Σ g^m e^(−g)/(m!·m)·e^(−c/m) over ``terms`` consecutive m: from m = 1, or from
     max(1, ⌊g − terms/2⌋) (``centred``); 0 where g = 0."""
     log_g = dr.log(dr.maximum(g, 1e-30))
     start = dr.maximum(dr.floor(g - 0.5 * terms), 1.0) if centred else 1.0
     # ln of Poisson's g^m e^(−g)/m! at m = start, then by its ratio g/(m + 1)
-    log_p = start * log_g - g - (dr.lgamma(start + 1.0) if centred else 0.0)
+    log_p = log_poisson(start, g, log_g) if centred else log_g - g
     total = 0.0
     for j in range(terms):
         m = start + j
@@ -176,5 +194,5 @@ def specular_weight(cos_i, sigma0, tau, wavelength, eta, k, reading: Reading):
 
 __all__ = ["DEFAULT_SIGMA0", "DEFAULT_TAU", "MONO_WAVELENGTH", "NEWTON_STEPS", "READINGS",
            "RGB_WAVELENGTHS", "Reading", "directional_diffuse", "effective_roughness",
-           "phase_variance", "rough_asymptote", "series", "shadowing", "solve_x",
+           "log_poisson", "phase_variance", "rough_asymptote", "series", "shadowing", "solve_x",
            "specular_weight"]

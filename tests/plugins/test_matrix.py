@@ -5,6 +5,14 @@ bitmap, a checkerboard, a mesh attribute), evaluates and samples it to finite, n
 values at a mesh's hit point, and renders a tiny image of a mesh carrying it, finite and lit.
 Whole rows of this matrix were broken before (spectral bitmaps, mesh attributes on multi-lobe
 plugins, compensated conductors in polarized variants).
+
+The scalar variants run every (plugin, texture kind) cell. In llvm variants every cell is a
+kernel of its own that LLVM compiles for about a second on an empty kernel cache, so the
+default suite runs each cell in one llvm variant and covers every pair of the three axes
+(plugin x kind, plugin x variant, kind x variant): a pairwise covering design (Cohen et al.
+1997, "The AETG System: An Approach to Testing Based on Combinatorial Design"), which catches
+every fault that two of the axes cause together, as each of those above did. ``pytest -m slow``
+(``make test-full``) runs every cell in every llvm variant.
 """
 
 import mitsuba as mi
@@ -15,8 +23,9 @@ from helpers import merl_file
 
 from mi_brdfs import registry
 
-VARIANTS = ["scalar_rgb", "scalar_spectral_polarized", "llvm_ad_rgb", "llvm_ad_mono",
-            "llvm_ad_spectral", "llvm_ad_spectral_polarized"]
+SCALAR = ["scalar_rgb", "scalar_spectral_polarized"]
+LLVM = ["llvm_ad_rgb", "llvm_ad_mono", "llvm_ad_spectral", "llvm_ad_spectral_polarized"]
+VARIANTS = SCALAR + LLVM
 
 #: Each plugin, the reflectance the matrix varies, and further parameters (a second lobe or
 #: the compensation, so that the mixture and its weights see the texture too)
@@ -60,45 +69,122 @@ def square(bsdf=None):
     return mesh
 
 
+def cells(variant: str, full: bool = False) -> list:
+    """The (plugin, texture kind) cells a variant runs: all of them in scalar variants (and with
+    ``full``); in llvm variants those whose plugin and kind indices sum to the variant's index
+    modulo the number of llvm variants, which puts each cell in exactly one llvm variant, and
+    each plugin and each kind in every llvm variant."""
+    kinds = list(KINDS)
+    every = [(p, k) for p in PLUGINS for k in kinds]
+    if full or variant not in LLVM:
+        return every
+    v = LLVM.index(variant)
+    return [(p, k) for i, p in enumerate(PLUGINS) for j, k in enumerate(kinds)
+            if (i + j) % len(LLVM) == v]
+
+
+#: The texture kinds, by name (the values are made in the variant under test).
+KINDS = ("constant", "rgb", "spectrum", "bitmap", "checkerboard", "mesh_attribute")
+
+
+def load(plugin: str, kind: str):
+    param, extra = PLUGINS[plugin]
+    return mi.load_dict(dict(extra, type=plugin, **{param: texture_kinds()[kind]}))
+
+
 def test01_every_plugin_is_in_the_matrix():
     assert set(PLUGINS) == set(registry.PLUGINS)
+    assert tuple(texture_kinds()) == KINDS
+
+
+def test01b_the_llvm_cells_cover_every_pair():
+    """Each cell in exactly one llvm variant; every plugin and every kind in each of them."""
+    seen = [c for v in LLVM for c in cells(v)]
+    assert sorted(seen) == sorted(cells(LLVM[0], full=True))
+    for v in LLVM:
+        assert {p for p, _ in cells(v)} == set(PLUGINS), v
+        assert {k for _, k in cells(v)} == set(KINDS), v
+
+
+def check_cells(chosen, direct: bool):
+    """With ``direct``, load, eval_pdf and sample each cell at a hit on the mesh: finite, and
+    non-negative where the value is a spectrum (a Mueller matrix has negative elements by
+    nature). Then render a tiny image of one mesh per cell under a constant sky, Mitsuba tracing
+    each cell's eval_pdf and sample symbolically into one kernel: each mesh finite,
+    non-negative and lit."""
+    if direct:
+        scene = mi.load_dict({"type": "scene", "s": square()})
+        si = scene.ray_intersect(mi.Ray3f([0.1, 0.2, 1.0], [0.0, 0.0, -1.0]))
+        si.wi = mi.Vector3f(0.3, 0.1, 0.95)
+        ctx = mi.BSDFContext()
+    for plugin, kind in chosen if direct else ():
+        bsdf = load(plugin, kind)
+        f, pdf = bsdf.eval_pdf(ctx, si, mi.Vector3f(-0.2, 0.3, 0.93))
+        _, weight = bsdf.sample(ctx, si, 0.4, mi.Point2f(0.3, 0.6))
+        for value in (f, pdf, weight):
+            a = np.array(value)
+            assert np.isfinite(a).all(), (plugin, kind)
+            assert mi.is_polarized or (a >= 0).all(), (plugin, kind)
+    image = render_row([load(plugin, kind) for plugin, kind in chosen])
+    for i, cell in enumerate(chosen):
+        tile = image[:, 2 * i:2 * i + 2]
+        assert np.isfinite(tile).all() and (tile >= 0).all() and tile.max() > 0, cell
+
+
+def render_row(bsdfs, res: int = 2):
+    """One render of a row of unit squares seen from above, the i-th carrying ``bsdfs[i]``:
+    columns [res·i, res·i + res) of the image are that square's (one kernel for the row, not
+    one per BSDF)."""
+    shapes = {}
+    for i, bsdf in enumerate(bsdfs):
+        mesh = square(bsdf)
+        params = mi.traverse(mesh)
+        # squares edge to edge, taller than the view: no pixel sees the sky past a square
+        x = np.array(params["vertex_positions"]).reshape(-1, 3) * [0.5, 0.75, 1.0]
+        params["vertex_positions"] = (x + [i - (len(bsdfs) - 1) / 2, 0, 0]).ravel()
+        params.update()
+        shapes[f"cell{i}"] = mesh
+    half = len(bsdfs) / 2  # the orthographic view spans [-1, 1] x [-1/aspect, 1/aspect]
+    scene = mi.load_dict({
+        "type": "scene", "integrator": {"type": "direct"},
+        "sensor": {"type": "orthographic",
+                   "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 2], target=[0, 0, 0],
+                                                              up=[0, 1, 0])
+                   @ mi.ScalarTransform4f().scale([half, half, 1]),
+                   "film": {"type": "hdrfilm", "width": res * len(bsdfs), "height": res,
+                            "rfilter": {"type": "box"},
+                            "pixel_format": "luminance" if mi.is_monochromatic else "rgb"}},
+        "sky": {"type": "constant", "radiance": 1.0}, **shapes})
+    return np.array(mi.render(scene, spp=2))
 
 
 @pytest.mark.parametrize("variant", VARIANTS)
 def test02_every_plugin_with_every_texture_kind(variant):
-    """Load, eval_pdf and sample at a hit on the mesh: finite, and non-negative where the
-    value is a spectrum (a Mueller matrix has negative elements by nature)."""
+    """Scalar variants: every cell, called directly and rendered. llvm variants: their cells
+    (:func:`cells`), rendered only: a direct call compiles a kernel per cell, about as long
+    as the render's, which traces the same eval_pdf and sample; the suite calls the plugins
+    directly in llvm variants everywhere else."""
     set_variant(variant)
-    scene = mi.load_dict({"type": "scene", "s": square()})
-    si = scene.ray_intersect(mi.Ray3f([0.1, 0.2, 1.0], [0.0, 0.0, -1.0]))
-    si.wi = mi.Vector3f(0.3, 0.1, 0.95)
-    ctx = mi.BSDFContext()
-    for plugin, (param, extra) in PLUGINS.items():
-        for kind, texture in texture_kinds().items():
-            bsdf = mi.load_dict(dict(extra, type=plugin, **{param: texture}))
-            f, pdf = bsdf.eval_pdf(ctx, si, mi.Vector3f(-0.2, 0.3, 0.93))
-            _, weight = bsdf.sample(ctx, si, 0.4, mi.Point2f(0.3, 0.6))
-            for value in (f, pdf, weight):
-                a = np.array(value)
-                assert np.isfinite(a).all(), (plugin, kind)
-                assert mi.is_polarized or (a >= 0).all(), (plugin, kind)
+    check_cells(cells(variant), direct=variant not in LLVM)
 
 
-@pytest.mark.parametrize("variant", VARIANTS)
-def test03_every_plugin_renders(variant):
-    """A 4 × 4 render of the mesh under a constant sky, its material every plugin with a
-    mesh attribute as the reflectance (the texture kind with no mean): finite and lit."""
+@pytest.mark.slow
+@pytest.mark.parametrize("variant", LLVM)
+def test03_every_cell_in_every_llvm_variant(variant):
+    """The whole product (make test-full): about a minute of compilation per variant."""
     set_variant(variant)
-    for plugin, (param, extra) in PLUGINS.items():
-        bsdf = mi.load_dict(dict(extra, type=plugin,
-                                 **{param: {"type": "mesh_attribute", "name": "vertex_color"}}))
-        scene = mi.load_dict({
-            "type": "scene", "integrator": {"type": "path", "max_depth": 3},
-            "sensor": {"type": "perspective", "fov": 60,
-                       "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 2],
-                                                                  target=[0, 0, 0], up=[0, 1, 0]),
-                       "film": {"type": "hdrfilm", "width": 4, "height": 4,
-                                "pixel_format": "luminance" if mi.is_monochromatic else "rgb"}},
-            "sky": {"type": "constant", "radiance": 1.0}, "s": square(bsdf)})
-        image = np.array(mi.render(scene, spp=1))
-        assert np.isfinite(image).all() and image.max() > 0, plugin
+    check_cells(cells(variant, full=True), direct=True)
+
+
+@pytest.mark.parametrize("variant", ["scalar_rgb", "llvm_ad_rgb"])
+def test04_the_row_render_sees_each_square_alone(variant):
+    """What check_cells relies on: a black square (reflectance 0) between lit ones is black in
+    exactly its own columns, no pixel seeing the sky beside it, so a cell that renders nothing
+    is caught in its own columns."""
+    set_variant(variant)
+    lit = {"type": "lambert", "reflectance": 0.5}
+    image = render_row([mi.load_dict(lit), mi.load_dict(dict(lit, reflectance=0.0)),
+                        mi.load_dict(lit)])
+    assert image.shape[:2] == (2, 6)
+    assert (image[:, 2:4] == 0).all()
+    assert (image[:, :2] > 0).all() and (image[:, 4:] > 0).all()

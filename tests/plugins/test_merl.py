@@ -278,3 +278,38 @@ def test12_one_load_per_file(variants_rgb, tmp_path):
     wi, wo = np.array([[0.3, 0.0, 0.954]]), np.array([[-0.3, 0.0, 0.954]])
     np.testing.assert_allclose(eval_pdf(second, wi, wo)[0], 2 * eval_pdf(first, wi, wo)[0],
                                rtol=1e-6)
+
+
+def _write_merl(path, values):
+    """An independent writer of MERL's format: three int32 dimensions, then red, green and
+    blue float64, each divided by MERL's scale, -1 where NaN (unmeasured)."""
+    raw = values / np.array([1.0, 1.15, 1.66]).reshape(3, 1, 1, 1) * 1500.0
+    raw = np.where(np.isnan(raw), -1.0, raw)
+    path.write_bytes(np.array([90, 90, 180], "<i4").tobytes() + raw.astype("<f8").tobytes())
+
+
+def test13_unmeasured_bins_are_counted_per_channel(variant_scalar_rgb, tmp_path):
+    """Near normal incidence (θh and θd below 1.2° and 10°: both directions above the
+    horizon) red is unmeasured in 10·10·180 bins, green in half of them, blue in a quarter,
+    inside green's: 4500 bins miss every channel, 13500 others some (red all of those, green
+    4500, blue none); bins below the horizon, unmeasured in every channel, are not counted.
+    The warning once counted red's 18000 alone as "bins unmeasured". Where red alone is
+    missing, green and blue are used."""
+    values = np.full((3, 90, 90, 180), 0.1)
+    values[0, :10, :10] = np.nan
+    values[1, :10, :5] = np.nan
+    values[2, :5, :5] = np.nan
+    values[:, 80:, 60:, :10] = np.nan  # θh ≥ 71°, θd ≥ 60°, φd < 10°: one direction below
+    path = tmp_path / "red.binary"
+    _write_merl(path, values)
+    with pytest.warns(UserWarning) as record:
+        bsdf = mi.load_dict(_spec(filename=str(path)))
+    messages = [str(w.message) for w in record]
+    assert f"merl: {path}: 4500 of 1458000 bins unmeasured in every channel, 13500 more in " \
+           "some channels only (red 13500, green 4500, blue 0); an unmeasured value is " \
+           "evaluated as 0" in messages, messages
+    s = np.sin(np.radians(7.0))  # θh = 0, θd = 7°: between θd bins 6 and 7, red alone missing
+    wi, wo = np.array([[s, 0.0, np.cos(np.radians(7.0))]]), np.array([[-s, 0.0,
+                                                                       np.cos(np.radians(7.0))]])
+    value = eval_pdf(bsdf, wi, wo)[0][0]
+    np.testing.assert_allclose(value, [0.0, 0.1 * wo[0, 2], 0.1 * wo[0, 2]], rtol=2 * HALF)

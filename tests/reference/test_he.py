@@ -228,6 +228,19 @@ def test07_series_converges_and_its_tail_bound_holds(g, c):
         assert math.fsum(t[m:]) * math.exp(peak) <= bound * (1 + 1e-12), (m, bound)
 
 
+@pytest.mark.parametrize("g,c", [(2.0, 1e9), (18.0, 3e9), (0.5, 1e7)])
+def test07b_terms_beyond_float64_are_skipped(monkeypatch, g, c):
+    """With τ = 10⁴ µm (he's bound) c reaches 10⁹: e^(−c/m) then keeps every term below
+    float64's range for millions of orders, and the terms rise for about √c of them before
+    they fall; the sum once ran through all of them (80 s to tabulate one he sampler). Each
+    is below e^(−800) up to m = c/800, and the largest of the first million (their logarithms
+    summed) is far below 1e-308: the converged sum is 0, within a few terms."""
+    monkeypatch.setattr(he, "MAX_TERMS", 200)
+    assert he.series(g, c) == 0.0
+    log_t = he.log_terms(g, c, np.arange(1, 10**6 + 1))
+    assert np.logaddexp.reduce(log_t) < math.log(1e-308)
+
+
 def test08_variant_differences():
     """What bbm's he.h states, measured:
 
