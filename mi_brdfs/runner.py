@@ -2,7 +2,7 @@
 Long work, run one way: :func:`run` hands tasks to a local pool or a Dask cluster and
 
 * checks the scheduler before any task starts: the address parsed (:func:`scheduler_address`),
-  a connection tried with a short timeout, then "waiting for workers at ..." and a bounded wait
+  a connection tried with a short timeout (:func:`reach`), then "waiting for workers at ..." and a bounded wait
   when the scheduler has none (:func:`connect`);
 * shows a progress bar (:class:`~mi_brdfs.progress.Progress`) and hands each finished task's
   result to ``on_done`` (which keeps it: a cache file), in this thread, as it comes;
@@ -185,10 +185,7 @@ def connect(address: str, *, timeout: float = CONNECT_TIMEOUT, wait: float = WOR
     except ImportError:
         raise MiBrdfsError("a Dask scheduler needs dask.distributed: pip install "
                            "'mi-brdfs[sweep]'") from None
-    host, port = address[len("tcp://"):].rsplit(":", 1)
-    why = _probe(host.strip("[]"), int(port), timeout)
-    if why:
-        raise MiBrdfsError(f"cannot reach the Dask scheduler at {address}: {why}")
+    reach(address, timeout)
     try:
         client = Client(address, timeout=timeout)
     except Exception as e:  # noqa: BLE001 - what answered there is no Dask scheduler
@@ -200,6 +197,16 @@ def connect(address: str, *, timeout: float = CONNECT_TIMEOUT, wait: float = WOR
         client.close()
         raise
     return client
+
+
+def reach(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
+    """One :class:`MiBrdfsError` unless a Dask scheduler answers at ``address``
+    (:func:`scheduler_address`'s form) within ``timeout`` seconds: a check a command makes
+    before it creates its output folder."""
+    host, port = address[len("tcp://"):].rsplit(":", 1)
+    why = _probe(host.strip("[]"), int(port), timeout)
+    if why:
+        raise MiBrdfsError(f"cannot reach the Dask scheduler at {address}: {why}")
 
 
 def _probe(host: str, port: int, timeout: float) -> str | None:

@@ -77,8 +77,8 @@ def test03_errors(files, tmp_path):
         sw.run_task(dict(file="/nonexistent/x.binary", model="ward", metric="cuberoot",
                          **SETTINGS))
     cli_one_line_error(["fit", files[0], "diffuse", "--models", "ward"],
-                       "a sweep (several TARGETs, --workers or --scheduler) takes MERL .binary "
-                       "files only")
+                       "fit: a sweep (several TARGETs with --models) takes MERL .binary files "
+                       "only, not diffuse")
 
 
 def test04_cli(files, tmp_path):
@@ -232,3 +232,25 @@ def test09_a_bad_scheduler_is_one_line_before_any_fit(flat, tmp_path, monkeypatc
                         f"tcp://127.0.0.1:{port}", "--out", str(tmp_path)],
                        f"cannot reach the Dask scheduler at tcp://127.0.0.1:{port}: ")
     assert time.perf_counter() - clock < 10 and calls == []
+
+
+def test10_an_empty_or_unreachable_scheduler_runs_nothing_and_makes_no_folder(flat, tmp_path,
+                                                                              monkeypatch):
+    """``--scheduler ''`` (an unset shell variable) is refused, not a run on the local pool; a
+    scheduler that does not answer leaves no report folder behind."""
+    calls = []
+    monkeypatch.setattr(sw, "run_task", _fake(calls))
+    monkeypatch.chdir(tmp_path)
+    cli_one_line_error(["fit", *flat[:2], "--models", "ward", "--scheduler", ""],
+                       "--scheduler '': no HOST:PORT; give tcp://HOST:PORT")
+    with pytest.raises(MiBrdfsError, match="scheduler '': no HOST:PORT"):
+        sw.sweep(flat[:2], ["ward"], "cuberoot", tmp_path / "api", scheduler="", **SETTINGS)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    cli_one_line_error(["fit", *flat[:2], "--models", "ward", "--scheduler",
+                        f"tcp://127.0.0.1:{port}"], "cannot reach the Dask scheduler")
+    with pytest.raises(MiBrdfsError, match="cannot reach the Dask scheduler"):
+        sw.sweep(flat[:2], ["ward"], "cuberoot", tmp_path / "api",
+                 scheduler=f"tcp://127.0.0.1:{port}", **SETTINGS)
+    assert calls == [] and list(tmp_path.iterdir()) == []

@@ -262,19 +262,24 @@ def _published_material(material: str | None, target) -> str | None:
 
 def _sweep(args, targets) -> int:
     """``mi-brdfs fit A.binary B.binary ... --models ...``: one task per (file, model)."""
+    from ..bsdfspec import describe
     from ..errors import MiBrdfsError
     from ..fit.models import chosen
     from ..fit.sweep import check_files, sweep
-    from ..runner import scheduler_address
+    from ..runner import reach, scheduler_address
 
-    address = scheduler_address(args.scheduler, "--scheduler") if args.scheduler else None
-    files = [t["filename"] for t in targets if isinstance(t, dict) and t["type"] == "merl"
-             and set(t) == {"type", "filename"}]
-    if len(files) != len(targets):
-        raise MiBrdfsError("a sweep (several TARGETs, --workers or --scheduler) takes MERL "
-                           ".binary files only")
+    address = scheduler_address(args.scheduler, "--scheduler") \
+        if args.scheduler is not None else None
+    merl = [isinstance(t, dict) and t["type"] == "merl" and set(t) == {"type", "filename"}
+            for t in targets]
+    if not all(merl):
+        raise MiBrdfsError("fit: a sweep (several TARGETs with --models) takes MERL .binary "
+                           "files only, not " + ", ".join(
+                               describe(t) for t, m in zip(targets, merl) if not m))
     names = chosen(args.models)
-    files = check_files(files)  # before the report folder: nothing made for a bad file
+    files = check_files([t["filename"] for t in targets])  # before the report folder: nothing
+    if address is not None:                                 # made for a bad file or scheduler
+        reach(address)
     out = _report_folder(args, "sweep.md")
     done = sweep(files, names, args.metric, out, pairs=args.pairs, steps=args.steps,
                  seed=args.seed, workers=args.workers, scheduler=address,

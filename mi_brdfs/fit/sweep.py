@@ -162,8 +162,10 @@ def sweep(files, models: list, metric: str, out, *, pairs: int = 16384, steps: i
     raises :class:`mi_brdfs.runner.Interrupted`. Every finished fit is in the cache either way.
     ``wait``: seconds to wait for the first worker of a Dask scheduler that has none.
     """
-    address = runner.scheduler_address(scheduler) if scheduler else None
+    address = runner.scheduler_address(scheduler) if scheduler is not None else None
     files = check_files(files)
+    if address is not None:
+        runner.reach(address)  # before the folder is made: nothing left for a wrong address
     out = Path(out)
     cache = out / CACHE
     cache.mkdir(parents=True, exist_ok=True)
