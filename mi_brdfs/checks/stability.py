@@ -76,7 +76,22 @@ class StabilityRow:
         return sum(sum(c.values()) for c in self.counts.values())
 
 
-def _count(name: str, values: np.ndarray, labels, row: StabilityRow) -> None:
+class _Labels:
+    """The label of each row: the stress cases' as given, a random row's made only when a
+    failing row asks for it (formatting every random pair's took seconds per sweep)."""
+
+    def __init__(self, fixed: list, text, *arrays):
+        self.fixed, self.text, self.arrays = fixed, text, arrays
+
+    def __getitem__(self, i: int) -> str:
+        if i < len(self.fixed):
+            return self.fixed[i]
+        return self.text(*(np.round(a[i - len(self.fixed)], 4).tolist() for a in self.arrays))
+
+
+def _count(name: str, values: np.ndarray, labels, row: StabilityRow, rows=None) -> None:
+    """Count the NaN, Inf and negative rows of ``values``; the first three of each kind are
+    kept with their labels (``labels[rows[i]]`` where ``values`` is a subset ``rows``)."""
     values = np.asarray(values, dtype=np.float64)
     values = values.reshape(len(values), -1) if values.size else values.reshape(0, 1)
     nan = np.isnan(values).any(axis=1)
@@ -85,7 +100,8 @@ def _count(name: str, values: np.ndarray, labels, row: StabilityRow) -> None:
     row.counts[name] = {"nan": int(nan.sum()), "inf": int(inf.sum()), "negative": int(neg.sum())}
     for mask, what in ((nan, "NaN"), (inf, "Inf"), (neg, "negative")):
         for i in np.flatnonzero(mask)[:3]:
-            row.worst.append((name, what, labels[i], values[i].tolist()))
+            label = labels[int(rows[i]) if rows is not None else int(i)]
+            row.worst.append((name, what, label, values[i].tolist()))
 
 
 @loaded_once()
@@ -105,8 +121,7 @@ def sweep_one(spec, n_random: int | None = None, seed: int = 0) -> StabilityRow:
     rwi = batch.random_directions(rng, n_random)
     rwo = batch.random_directions(rng, n_random)
     wi, wo = np.concatenate([wi, rwi]), np.concatenate([wo, rwo])
-    labels = labels + [f"random wi {np.round(a, 4).tolist()}, wo {np.round(b, 4).tolist()}"
-                       for a, b in zip(rwi, rwo)]
+    labels = _Labels(labels, lambda a, b: f"random wi {a}, wo {b}", rwi, rwo)
     e = batch.evaluate(bsdf, wi, wo)
     _count("eval", e.value, labels, row)
     _count("pdf", e.pdf, labels, row)
@@ -119,15 +134,15 @@ def sweep_one(spec, n_random: int | None = None, seed: int = 0) -> StabilityRow:
     swi = np.concatenate([inc[[g[0] for g in grid]], rwi])
     s1 = np.concatenate([[g[1] for g in grid], rng.random(n_random)])
     s2 = np.concatenate([[[g[2], g[3]] for g in grid], rng.random((n_random, 2))])
-    slabels = [f"sample at wi {names[g[0]]}, u = ({g[1]:g}, {g[2]:g}, {g[3]:g})" for g in grid]
-    slabels += [f"sample at random wi {np.round(a, 4).tolist()}" for a in rwi]
+    slabels = _Labels([f"sample at wi {names[g[0]]}, u = ({g[1]:g}, {g[2]:g}, {g[3]:g})"
+                       for g in grid], lambda a: f"sample at random wi {a}", rwi)
     s = batch.sample(bsdf, swi, s1, s2)
     _count("weight", s.weight, slabels, row)
     # A sample with weight 0 has failed: integrators discard it, and its other fields are
     # undefined (Mitsuba's roughconductor returns bs.pdf = NaN at exactly tangent incidence).
     produced = np.any(s.weight != 0, axis=1)
     idx = np.flatnonzero(produced)
-    _count("bs.pdf", s.pdf[idx], [slabels[i] for i in idx], row)
+    _count("bs.pdf", s.pdf[idx], slabels, row, rows=idx)
     row.failed_nonfinite = int((~produced & ~np.isfinite(s.pdf)).sum())
     norm_err = np.abs(np.linalg.norm(s.wo, axis=1) - 1)
     bad_wo = produced & ~(norm_err < 1e-3)

@@ -204,27 +204,42 @@ def series(g, c, terms: int | None = None, rtol: float = RTOL) -> np.ndarray:
     scale = np.full(g.size, -np.inf)  # ln of the largest term so far
     total = np.zeros(g.size)  # the sum over e^scale
     prev = np.full(g.size, -np.inf)
-    act = np.arange(g.size)
+    log_m = np.log(m0)
+    # the elements still summing (their index in ``act``), compacted as they converge
+    act, done_total, done_scale = np.arange(g.size), np.zeros(g.size), np.zeros(g.size)
+    live = np.ones(g.size, dtype=bool)  # not converged yet
     for j in range(MAX_TERMS if converge else int(terms)):
-        m = m0[act] + j
-        log_t = log_p[act] - np.log(m) - c[act] / m
-        new = np.maximum(scale[act], log_t)
-        total[act] = total[act] * np.exp(scale[act] - new) + np.exp(log_t - new)
-        scale[act] = new
-        log_p[act] += log_g[act] - np.log(m + 1.0)
+        m = m0 + j
+        log_t = log_p - log_m - c / m
+        new = np.maximum(scale, log_t)
+        term = np.exp(log_t - new)  # the term over the largest so far
+        total = total * np.exp(scale - new) + term
+        scale = new
+        log_m = np.log(m + 1.0)
+        log_p = log_p + (log_g - log_m)
         if converge:
-            log_r = log_t - prev[act]
+            log_r = log_t - prev
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 r = np.exp(np.minimum(log_r, 0.0))
-                tail = np.exp(log_t - scale[act]) * r / (1.0 - r)
-            done = (m >= 2) & (log_r < 0) & (tail <= rtol * total[act])
-            prev[act] = log_t
-            act = act[~done]
-            if act.size == 0:
-                break
-    if converge and act.size:
+                tail = term * r / (1.0 - r)
+            done = live & (m >= 2) & (log_r < 0) & (tail <= rtol * total)
+            prev = log_t
+            if done.any():
+                done_total[act[done]], done_scale[act[done]] = total[done], scale[done]
+                live &= ~done
+                count = np.count_nonzero(live)
+                if count == 0:
+                    break
+                if count < 0.75 * live.size:  # summing on past convergence costs less
+                    act, m0, c, log_g, log_p, log_m, scale, total, prev = (
+                        a[live] for a in (act, m0, c, log_g, log_p, log_m, scale, total,
+                                          prev))
+                    live = np.ones(count, dtype=bool)
+    if converge and live.any():
         raise ValueError(f"series: not converged in {MAX_TERMS} terms (g up to {g.max():.3g})")
-    out[idx] = total * np.exp(scale)
+    if not converge:
+        done_total, done_scale = total, scale
+    out[idx] = done_total * np.exp(done_scale)
     return out.reshape(shape)
 
 

@@ -211,6 +211,30 @@ def test16_stability_rejects_nan_at_grazing(any_variant):
     assert not result.passed and "NaN eval" in result.message and "wo tangent" in result.message
 
 
+def test16b_stability_labels_a_random_row(variant_llvm_ad_rgb):
+    """A bad value found only among the random pairs names its pair: ``negative`` is negative
+    wherever wo.y < 0, which some random pairs hit; their labels are made only for the rows
+    reported."""
+    from mi_brdfs.checks.stability import adversarial_pairs, sweep_one
+
+    register_broken()
+    row = sweep_one(broken("negative"), n_random=N_RANDOM)
+    labels = [label for name, what, label, _ in row.worst if name == "eval"]
+    stressed = int((adversarial_pairs()[1][:, 1] < 0).sum())
+    assert row.counts["eval"]["negative"] > stressed, row.counts  # random rows among them
+    assert len(labels) == 3, labels
+    for label in labels:
+        assert label.startswith("wi ") or (label.startswith("random wi [") and ", wo [" in label)
+    # a subset's rows keep their own labels: the random pair after two stress rows
+    from mi_brdfs.checks.stability import StabilityRow, _count, _Labels
+
+    lazy = _Labels(["stress 0", "stress 1"], lambda a: f"random {a}", np.array([[0.123456], [2.0]]))
+    subset = StabilityRow(None)
+    _count("bs.pdf", np.array([1.0, -1.0]), lazy, subset, rows=np.array([1, 3]))
+    assert subset.worst == [("bs.pdf", "negative", "random [2.0]", [-1.0])]
+    assert lazy[2] == "random [0.1235]"
+
+
 def test17_stability_grid_and_rejected_parameters(variant_scalar_rgb):
     grid = checks.parameter_grid({"type": "lambert"}, reflectance=[0.0, 1.0, 1.5])
     result = checks.check_stability(grid, n_random=50)
