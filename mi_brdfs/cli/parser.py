@@ -444,6 +444,9 @@ def _add_measure(sub) -> None:
                       "every bin of MERL's format (Matusik et al. 2003: 90 θh x 90 θd x 180 φd, "
                       "red, green, blue), the bins below the horizon unmeasured, written as a "
                       ".binary file that the tools reading MERL's data read.")
+    # measure tabulates in an RGB JIT variant (mi_brdfs.measured.tabulate): no scalar fallback
+    [variant] = [a for a in m._actions if a.dest == "variant"]
+    variant.help = "Mitsuba variant: an RGB JIT one, llvm_ad_rgb (default) or cuda_ad_rgb"
     m.add_argument("-o", "--output", required=True, type=_output(".binary"),
                    metavar="FILE.binary", help="where to write it")
     m.add_argument("--noise", type=_noise, metavar="REL[,ABS]",
