@@ -41,8 +41,13 @@ def mitsuba_error_line(error: BaseException) -> str:
     """
     One line from a Mitsuba loader error: the location Mitsuba gives and the last line of the
     cause (a Python plugin's exception arrives inside Mitsuba's message with its traceback).
+    A Ctrl-C that Mitsuba wrapped so (a Python plugin's constructor interrupted) is raised
+    again as KeyboardInterrupt: every caller would otherwise take it for a bad input, and one
+    that skips bad inputs (simplify's candidates) would carry on.
     """
     text = str(error).strip()
+    if "KeyboardInterrupt" in text:
+        raise KeyboardInterrupt from error
     text = re.sub(r"^\[[\w.]+:\d+\]\s*", "", text)  # Mitsuba's [parser.cpp:1718] source tag
     head, sep, tail = text.partition("Traceback (most recent call last):")
     if sep:

@@ -50,3 +50,24 @@ def test02_the_decorator():
     with pytest.raises(CountError, match=r"test_errors.f: m = 0 is invalid"):
         f(1, m=0)
     assert issubclass(CountError, ValueError) and not issubclass(CountError, ParameterError)
+
+
+def test_interrupt01_a_wrapped_ctrl_c_is_not_a_bad_input(variant_scalar_rgb):
+    """A Python plugin's constructor interrupted by Ctrl-C reaches the caller as Mitsuba's
+    RuntimeError with the text only; mitsuba_error_line raises it again as KeyboardInterrupt,
+    so that no caller (simplify skips candidates that fail to load) takes it for a bad input,
+    while another loader error stays one line."""
+    import mitsuba as mi
+
+    from mi_brdfs.bsdfspec import load_bsdf
+    from mi_brdfs.errors import MiBrdfsError
+
+    class Interrupted(mi.BSDF):
+        def __init__(self, props):
+            raise KeyboardInterrupt
+
+    mi.register_bsdf("interrupted_on_load", Interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        load_bsdf({"type": "interrupted_on_load"})
+    with pytest.raises(MiBrdfsError, match="lambert"):
+        load_bsdf({"type": "lambert", "reflectance": 2.0})
