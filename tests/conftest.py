@@ -12,6 +12,14 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+import signal  # noqa: E402
+
+# Ctrl-C as a terminal delivers it: a job started in the background (`make test &`, a CI
+# runner) starts with SIGINT ignored, which the runner rightly respects and every child
+# process would inherit, so the tests of what Ctrl-C does would see nothing happen. A handler
+# (unlike SIG_IGN) is reset to the default in a child at exec, where Python installs its own.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 import mi_brdfs  # noqa: F401  (import first: it chooses the libLLVM before drjit loads)
 import drjit as dr
