@@ -5,8 +5,11 @@ light and a dim sky) with the sphere's BSDF swapped, rendered in ``llvm_ad_rgb``
 with matplotlib into one labelled PNG::
 
     python -m mi_brdfs.gallery [--out docs/gallery.png] [--spp N] [--res N] [--quick] [--exr DIR]
+                               [--variant scalar_rgb]
 
-(``make gallery`` writes ``docs/gallery.png``). The rows, :data:`ROWS`, show what sets the
+(``make gallery`` writes ``docs/gallery.png``; ``--variant scalar_rgb`` renders the tiles in
+that variant instead, which at ``--quick``'s sizes is faster than compiling a kernel per tile,
+as the test suite renders it). The rows, :data:`ROWS`, show what sets the
 models apart:
 
 * ``phong``: the normalized form (Lafortune & Willems 1994, "Using the Modified Phong
@@ -58,8 +61,9 @@ import numpy as np
 
 from .errors import MiBrdfsError
 
-#: The variant the gallery renders in.
+#: The variant the gallery renders in, and the others it may (``--variant``).
 VARIANT = "llvm_ad_rgb"
+VARIANTS = ("llvm_ad_rgb", "scalar_rgb")
 
 #: Defaults of a full gallery (docs/gallery.png) and of ``--quick`` (a smoke test).
 DEFAULT_RES, DEFAULT_SPP = 160, 512
@@ -208,6 +212,7 @@ class Gallery:
     spp: int
     res: int
     seconds: float
+    variant: str = VARIANT
     path: str | None = None
     exr: list = field(default_factory=list)
     #: "row / column: N non-finite pixel values", for each tile that has some.
@@ -219,23 +224,24 @@ def _slug(text: str) -> str:
 
 
 def _tabulated(spec: dict, folder: Path) -> dict:
-    """A tile's spec, with a ``source`` BSDF tabulated in MERL's format into ``folder`` and
-    named as the ``merl`` plugin's file."""
+    """A tile's spec, with a ``source`` BSDF tabulated in MERL's format (in :data:`VARIANT`)
+    into ``folder`` and named as the ``merl`` plugin's file."""
     if "source" not in spec:
         return spec
     from .measured.tabulate import measure
 
     path = folder / f"{_slug(spec['source'])}.binary"
     if not path.exists():
-        measure(spec["source"], path)
+        measure(spec["source"], path, variant=VARIANT)
     return {k: v for k, v in spec.items() if k != "source"} | {"filename": str(path)}
 
 
 def render_tiles(rows=ROWS, spp: int = DEFAULT_SPP, res: int = DEFAULT_RES, seed: int = 0,
-                 exr_dir=None, progress: bool = True) -> Gallery:
+                 exr_dir=None, progress: bool = True, variant: str = VARIANT) -> Gallery:
     """
     Render every tile of ``rows`` in the material scene (``res`` × ``res``, ``spp`` samples per
-    pixel) in :data:`VARIANT`; with ``exr_dir`` also write each tile there as a float32 EXR.
+    pixel) in ``variant`` (one of :data:`VARIANTS`); with ``exr_dir`` also write each tile there
+    as a float32 EXR. The ``merl`` tiles' sources are tabulated first, all in :data:`VARIANT`.
     """
     import mitsuba as mi
 
@@ -247,9 +253,11 @@ def render_tiles(rows=ROWS, spp: int = DEFAULT_SPP, res: int = DEFAULT_RES, seed
 
     if spp < 1 or res < 1:
         raise MiBrdfsError(f"the gallery needs spp ≥ 1 and res ≥ 1, got spp={spp}, res={res}")
-    use_variant(VARIANT, fallback=False)
+    if variant not in VARIANTS:
+        raise MiBrdfsError(f"the gallery renders in {' or '.join(VARIANTS)}, got variant = "
+                           f"{variant!r}")
     start = time.perf_counter()
-    result = Gallery([], tuple(rows), spp, res, 0.0)
+    result = Gallery([], tuple(rows), spp, res, 0.0, variant)
     if exr_dir is not None:
         exr_dir = Path(exr_dir)
         exr_dir.mkdir(parents=True, exist_ok=True)
@@ -257,10 +265,12 @@ def render_tiles(rows=ROWS, spp: int = DEFAULT_SPP, res: int = DEFAULT_RES, seed
     bar = Progress(total, label="gallery", unit=" tiles") if progress else None
     folder = tempfile.TemporaryDirectory()
     try:
-        for row in rows:
+        specs = [[_tabulated(row.spec(c), Path(folder.name)) for c in range(len(row.columns))]
+                 for row in rows]
+        use_variant(variant, fallback=False)
+        for row, row_specs in zip(rows, specs):
             images = []
-            for c, (title, _) in enumerate(row.columns):
-                spec = _tabulated(row.spec(c), Path(folder.name))
+            for c, ((title, _), spec) in enumerate(zip(row.columns, row_specs)):
                 scene = load_scene("material", bsdfs={"material": spec}, spp=spp, res=res)
                 image = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float32)
                 bad = int((~np.isfinite(image)).sum())
@@ -272,7 +282,7 @@ def render_tiles(rows=ROWS, spp: int = DEFAULT_SPP, res: int = DEFAULT_RES, seed
                     path = exr_dir / f"{_slug(row.title + ' ' + row.detail)}-{c}.exr"
                     write_exr(path, image, {"mi_brdfs.version": __version__,
                                             "gallery.row": row.title, "gallery.column": title,
-                                            "render.spp": spp, "render.variant": VARIANT})
+                                            "render.spp": spp, "render.variant": variant})
                     result.exr.append(str(path))
                 if bar:
                     bar.update(sum(len(r) for r in result.images) + len(images),
@@ -299,7 +309,7 @@ def draw(result: Gallery, path) -> str:
     fig.text(LABEL_W / W, 1 - 10 / H, "mi_brdfs: every plugin and form", fontsize=12,
              fontweight="bold", va="top", ha="left")
     fig.text(LABEL_W / W, 1 - 29 / H,
-             f"scenes/material.xml, {VARIANT}, {result.spp} spp, {result.res}² px per tile",
+             f"scenes/material.xml, {result.variant}, {result.spp} spp, {result.res}² px per tile",
              fontsize=8, va="top", ha="left", color="0.3")
     for r, row in enumerate(result.rows):
         _, y, _, h = box.label_box(r)
@@ -332,7 +342,8 @@ def draw(result: Gallery, path) -> str:
 
 
 def gallery(out="docs/gallery.png", spp: int = DEFAULT_SPP, res: int = DEFAULT_RES,
-            rows=ROWS, exr_dir=None, seed: int = 0, progress: bool = True) -> Gallery:
+            rows=ROWS, exr_dir=None, seed: int = 0, progress: bool = True,
+            variant: str = VARIANT) -> Gallery:
     """Render every tile of ``rows`` and write the labelled gallery to the PNG ``out``."""
     from .imageio import check_writable
 
@@ -340,7 +351,8 @@ def gallery(out="docs/gallery.png", spp: int = DEFAULT_SPP, res: int = DEFAULT_R
         raise MiBrdfsError(f"the gallery needs spp ≥ 1 and res ≥ 1, got spp={spp}, res={res}")
     Path(out).expanduser().absolute().parent.mkdir(parents=True, exist_ok=True)
     out = check_writable(out)  # before minutes of rendering
-    result = render_tiles(rows, spp=spp, res=res, seed=seed, exr_dir=exr_dir, progress=progress)
+    result = render_tiles(rows, spp=spp, res=res, seed=seed, exr_dir=exr_dir, progress=progress,
+                          variant=variant)
     draw(result, out)
     return result
 
@@ -360,11 +372,14 @@ def main(argv=None) -> int:
                         help="tiny tiles and few samples: checks that everything renders")
     parser.add_argument("--exr", metavar="DIR", default=None,
                         help="also write each tile as a float32 EXR into DIR")
+    parser.add_argument("--variant", choices=VARIANTS, default=VARIANT,
+                        help="the variant the tiles render in (default: %(default)s; "
+                             "scalar_rgb: no kernel to compile per tile, faster for --quick)")
     args = parser.parse_args(argv)
     spp = args.spp if args.spp is not None else QUICK_SPP if args.quick else DEFAULT_SPP
     res = args.res if args.res is not None else QUICK_RES if args.quick else DEFAULT_RES
     try:
-        result = gallery(args.out, spp=spp, res=res, exr_dir=args.exr)
+        result = gallery(args.out, spp=spp, res=res, exr_dir=args.exr, variant=args.variant)
     except MiBrdfsError as e:
         print(f"gallery: error: {e}", file=sys.stderr)
         return 2

@@ -33,12 +33,17 @@ def test03_other_material_is_different(variant_llvm_ad_rgb):
     assert r.flip.shape == (32, 32) and 0 <= r.flip.min() and r.flip.max() <= 1
 
 
-def test04_cli_writes_figure_and_exrs(tmp_path):
+def test04_cli_writes_figure_and_exrs(tmp_path, monkeypatch, capsys):
+    """The command in this process (tests/cli runs the command line in subprocesses)."""
+    from mi_brdfs.cli import main
+
+    monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
     out = tmp_path / "cmp.png"
-    p = run("compare", "cbox", "--swap", f"white={WHITE}", "--spp", "4", "-D", "res=16",
-            "-o", str(out))
-    assert p.returncode == 0, p.stderr
-    assert "noise floor" in p.stdout and "within noise" in p.stdout
+    code = main(["compare", "cbox", "--swap", f"white={WHITE}", "--spp", "4", "-D", "res=16",
+                 "-o", str(out)])
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    assert "noise floor" in printed.out and "within noise" in printed.out
     assert out.read_bytes()[:4] == b"\x89PNG"
     a, header = read_exr(tmp_path / "cmp-A.exr")
     d, _ = read_exr(tmp_path / "cmp-diff.exr")

@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from helpers import cli_one_line_error, run
+from helpers import cli_one_line_error
 from mi_brdfs.errors import MiBrdfsError
 from mi_brdfs.fit import METRICS, direction_pairs, fit
 from mi_brdfs.fit.optimise import measured_pairs, metric_weights, objective_np
@@ -91,11 +91,24 @@ def test05_errors(ggx_file):
                        "missing.binary: cannot read the MERL file")
 
 
-def test06_cli(ggx_file, tmp_path):
-    p = run("fit", str(ggx_file), "--model", "ward", "--metric", "low", "--pairs", "2048",
-            "--steps", "100", "-q", "-o", str(tmp_path / "f.json"))
-    assert p.returncode == 0, p.stderr
-    assert "metric: low" in p.stdout and "measured target: 2048 of its bins" in p.stdout
+def _main(args, monkeypatch, capsys) -> tuple:
+    """``mi-brdfs args`` in this process (tests/cli runs the command line in subprocesses):
+    (exit status, stdout, stderr)."""
+    from mi_brdfs.cli import main
+
+    monkeypatch.setenv("MI_BRDFS_NO_PROGRESS", "1")
+    code = main(args)
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test06_cli(ggx_file, tmp_path, monkeypatch, capsys):
+    code, out, err = _main(["fit", str(ggx_file), "--model", "ward", "--metric", "low",
+                            "--pairs", "1024", "--steps", "20", "-q",
+                            "-o", str(tmp_path / "f.json")], monkeypatch, capsys)
+    assert code == 0, err
+    assert "metric: low" in out and "measured target: 1024 of its bins" in out
+    assert json.loads((tmp_path / "f.json").read_text())["metric"] == "low"
 
 
 def test07_ranking_table():
@@ -110,13 +123,14 @@ def test07_ranking_table():
     assert rows["b"] == ("1 (1)", "2 (2)", "1 (1)", "3 (3)")
 
 
-def test08_models_all_cli(ggx_file, tmp_path):
+def test08_models_all_cli(ggx_file, tmp_path, monkeypatch, capsys):
     """--models fits the lecture models named, scores each under every metric and writes the
     report, its JSON and the two figures; Cook-Torrance, the target's own model family, ranks
     first under every metric against Phong. Bad names are one line."""
-    p = run("fit", str(ggx_file), "--models", "phong,cooktorrance", "--pairs", "2048",
-            "--steps", "150", "-q", "--out", str(tmp_path))
-    assert p.returncode == 0, p.stderr
+    code, _, err = _main(["fit", str(ggx_file), "--models", "phong,cooktorrance", "--pairs",
+                          "1024", "--steps", "40", "-q", "--out", str(tmp_path)],
+                         monkeypatch, capsys)
+    assert code == 0, err
     assert sorted(f.name for f in tmp_path.iterdir()) == ["lobes.png", "models.json",
                                                           "models.md", "spheres.png"]
     doc = json.loads((tmp_path / "models.json").read_text())
@@ -130,12 +144,12 @@ def test08_models_all_cli(ggx_file, tmp_path):
                        "not allowed with argument")
 
 
-def test09_compare_published(tmp_path):
+def test09_compare_published(tmp_path, monkeypatch, capsys):
     """Data tabulated from Ngan et al.'s published Ward fit of blue-acrylic: that preset
     scores (near) 0 on it under every metric, another material's does not; a model without an
     exact preset says why. The command takes the material's name from the file's."""
     from mi_brdfs import presets
-    from mi_brdfs.fit.models import fit_models
+    from mi_brdfs.fit.models import fit_models, published
 
     path = tmp_path / "blue-acrylic.binary"
     measure(presets.spec("ward", "ngan:blue-acrylic"), path, variant="llvm_ad_rgb")
@@ -146,11 +160,12 @@ def test09_compare_published(tmp_path):
     assert all(theirs[m] < 1e-4 * max(done["scores"]["ward"][m], 1e-12) + 1e-9
                for m in METRICS), theirs
     assert why[0] is None and "no exact form in ashikhmin" in why[1]
-    other = fit_models(str(path), ["ward"], "ngan", tmp_path / "o", **sizes,
-                       compare_published="gold-metallic-paint")["published"]["ward"][0]
+    # another material's preset, scored on the same pairs as the fits (seed 0)
+    other = published(str(path), ["ward"], "gold-metallic-paint", 1024, 0)["ward"][0]
     assert other["ngan"] > 100 * (theirs["ngan"] + 1e-12)
-    p = run("fit", str(path), "--models", "ward", "--compare-published", "--pairs", "1024",
-            "--steps", "20", "-q", "--out", str(tmp_path / "cli"))
-    assert p.returncode == 0, p.stderr
-    assert "| ward | " in p.stdout and "published / ours" in p.stdout
+    code, out, err = _main(["fit", str(path), "--models", "ward", "--compare-published",
+                            "--pairs", "1024", "--steps", "20", "-q",
+                            "--out", str(tmp_path / "cli")], monkeypatch, capsys)
+    assert code == 0, err
+    assert "| ward | " in out and "published / ours" in out
     assert "blue-acrylic" in (tmp_path / "cli" / "models.md").read_text()

@@ -21,11 +21,16 @@ nothing; run it on an otherwise idle machine.
 
     python validation/merl_layout.py              # 8 rounds of 15 repeats, 128², 32 spp
     python validation/merl_layout.py --quick      # a smoke run (the test suite runs this)
+
+The smoke run measures every layout in one process, in turn (its timings mean nothing; each
+process imports Mitsuba and reads the table again).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import gc
 import json
 import os
 import statistics
@@ -69,8 +74,27 @@ def _use_layout(layout: str) -> None:
                                                             mi.UInt32(k)))
 
 
-def worker(layout: str, filename: str, res: int, spp: int, repeats: int) -> dict:
-    """One process's measurement of ``layout``: the median ratio and the times per sample."""
+@contextlib.contextmanager
+def _layout(layout: str):
+    """Within: the merl plugin of this process stores and looks up its bins as ``layout``;
+    the tables it built before, and the layout, are dropped on the way out."""
+    from mi_brdfs.measured import lookup
+    from mi_brdfs.plugins import merl as plugin
+
+    saved = plugin._aligned, lookup._flat
+    plugin._tables.clear()
+    _use_layout(layout)
+    try:
+        yield
+    finally:
+        plugin._aligned, lookup._flat = saved
+        plugin._tables.clear()
+        gc.collect()  # the renders' BSDFs: a JIT render traces every BSDF alive
+
+
+def worker(layouts: list, filename: str, res: int, spp: int, repeats: int) -> list:
+    """One process's measurement of each of ``layouts`` in turn: the median ratio and the
+    times per sample."""
     import mi_brdfs
 
     mi_brdfs.use_variant("llvm_ad_rgb")
@@ -79,13 +103,17 @@ def worker(layout: str, filename: str, res: int, spp: int, repeats: int) -> dict
     from mi_brdfs.benchmark.measured import render_cost
     from mi_brdfs.measured import lookup
 
-    _use_layout(layout)
-    ratio, per = render_cost(f"merl filename={filename}", res, spp, repeats)
-    bsdf = mi.load_dict({"type": "merl", "filename": filename})
-    _check(bsdf, filename, layout)
-    return {"ratio": ratio, "ns": per,
-            "start": int(np.from_dlpack(bsdf.table.buffer).ctypes.data % 64),  # past a line
-            "row": int(lookup._flat(0, 1, 0)[0])}  # 180 in MERL's order, 2 in blocks
+    out = []
+    for layout in layouts:
+        with _layout(layout):
+            ratio, per = render_cost(f"merl filename={filename}", res, spp, repeats)
+            bsdf = mi.load_dict({"type": "merl", "filename": filename})
+            _check(bsdf, filename, layout)
+            out.append({"ratio": ratio, "ns": per,
+                        "start": int(np.from_dlpack(bsdf.table.buffer).ctypes.data % 64),
+                        "row": int(lookup._flat(0, 1, 0)[0])})  # 180 in MERL's order, 2 in blocks
+            del bsdf
+    return out
 
 
 def _check(bsdf, filename, layout: str) -> None:
@@ -109,12 +137,14 @@ def _check(bsdf, filename, layout: str) -> None:
         sys.exit(f"merl_layout.py: {layout!r} does not evaluate the file's values")
 
 
-def _run(layout, filename, args) -> dict:
-    cmd = [sys.executable, __file__, "--worker", layout, "--file", str(filename),
+def _run(layouts, filename, args) -> list:
+    """The measurements of ``layouts``, in turn in one worker process."""
+    cmd = [sys.executable, __file__, "--worker", *layouts, "--file", str(filename),
            "--res", str(args.res), "--spp", str(args.spp), "--repeats", str(args.repeats)]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     if p.returncode != 0:
-        sys.exit(f"merl_layout.py: the worker for {layout!r} failed:\n{p.stderr}")
+        sys.exit(f"merl_layout.py: the worker for {', '.join(map(repr, layouts))} failed:"
+                 f"\n{p.stderr}")
     return json.loads(p.stdout.strip().splitlines()[-1])
 
 
@@ -141,7 +171,7 @@ def main(argv=None):
     parser.add_argument("--res", type=int, default=128)
     parser.add_argument("--spp", type=int, default=32)
     parser.add_argument("--file", help="a MERL file (default: the bench's tabulation)")
-    parser.add_argument("--worker", choices=LAYOUTS, help=argparse.SUPPRESS)
+    parser.add_argument("--worker", choices=LAYOUTS, nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.quick:
         args.rounds, args.repeats, args.res, args.spp = 1, 2, 16, 2
@@ -151,9 +181,10 @@ def main(argv=None):
     with tempfile.TemporaryDirectory() as folder:
         filename = args.file or _tabulate(Path(folder) / "cost.binary")
         results = {layout: [] for layout in LAYOUTS}
-        for _ in range(args.rounds):
-            for layout in LAYOUTS:
-                results[layout].append(_run(layout, filename, args))
+        turns = [LAYOUTS] if args.quick else [[layout] for layout in LAYOUTS] * args.rounds
+        for layouts in turns:
+            for layout, measured in zip(layouts, _run(layouts, filename, args)):
+                results[layout].append(measured)
     print(f"merl against the cooktorrance it tabulates, llvm_ad_rgb, showcase {args.res}², "
           f"{args.spp} spp; {args.rounds} round(s) of {args.repeats} interleaved repeats "
           f"({os.cpu_count()} cores):\n")

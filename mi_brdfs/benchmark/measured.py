@@ -16,7 +16,7 @@ import drjit as dr
 import mitsuba as mi
 
 from ..bsdfspec import load_bsdf
-from ..campaign.core import Context, Row, Section, md_table
+from ..campaign.core import SKIPPED, Context, Row, Section, md_table
 from ..measured.tabulate import measure
 from ..scenes import load_scene
 from ..timing import interleaved, median, median_ratio
@@ -88,6 +88,16 @@ def time_ratio(ctx: Context, scene: str, bsdf) -> tuple:
     return times["own"], times["cosine"], times["cosine"] / times["own"]
 
 
+def _skipped_material(s: Section, label: str) -> tuple:
+    """A material a quick run leaves unmeasured (it measures the first alone: each tabulation,
+    and each material in each scene, is a kernel to compile): its figures named
+    (:data:`SKIPPED`), its row."""
+    s.values[f"merl sampling vs cosine, estimator efficiency: {label}"] = SKIPPED
+    for key in (f" (furnace): {label}", f": {label}"):
+        s.values[f"merl sampling vs cosine, time to 1 %{key}"] = SKIPPED
+    return (label, "—", "—", SKIPPED, *["—"] * 6)
+
+
 def _efficiency(ctx: Context, s: Section, label: str, merl, target) -> tuple:
     """Estimator efficiency, and time to 1 % in the furnace and the showcase, merl's sampler
     against cosine sampling."""
@@ -99,7 +109,7 @@ def _efficiency(ctx: Context, s: Section, label: str, merl, target) -> tuple:
     cells = []
     for scene, key in (("furnace", f" (furnace): {label}"), ("showcase", f": {label}")):
         if ctx.quick and scene == "showcase":  # the quick run checks the machinery alone
-            s.values[f"merl sampling vs cosine, time to 1 %{key}"] = "— (quick run)"
+            s.values[f"merl sampling vs cosine, time to 1 %{key}"] = SKIPPED
             cells += ["—"] * 3
             continue
         t_merl, t_cos, ratio = time_ratio(ctx, scene, merl)
@@ -152,15 +162,19 @@ def _fit_costs(ctx: Context, s: Section, folder: Path, files: list) -> list:
     sizes = dict(pairs=ctx.n(16384, 1024), steps=ctx.n(800, 40))
     models = list(STYLES) if not ctx.quick else ["ward"]  # quick: the machinery alone
     clock = time.perf_counter()
-    done = fit_models(files[0], models, "cuberoot", folder / "models", **sizes)
+    # quick: no figures (their renders are kernels to compile; tests/test_fit_measured.py
+    # draws them)
+    done = fit_models(files[0], models, "cuberoot", folder / "models", **sizes,
+                      figures=not ctx.quick)
     total = time.perf_counter() - clock
     slowest = max(r.seconds for r in done["results"].values())
     s.rows.append(Row("fit", f"one model fitted to one MERL material (slowest of "
                       f"{len(models)})", f"{slowest:.1f} s", "≤ 30 s", slowest <= 30.0))
-    s.rows.append(Row("fit", "--models all on one MERL material, figures included",
+    s.rows.append(Row("fit", "--models all on one MERL material" +
+                      (", figures included" if not ctx.quick else ""),
                       f"{total:.0f} s", "≤ 300 s", total <= 300.0))
     if ctx.quick:  # a sweep's processes each import Mitsuba: tests/test_sweep.py runs them
-        s.values["fit sweep speed-up, 2 workers vs 1"] = "— (quick run)"
+        s.values["fit sweep speed-up, 2 workers vs 1"] = SKIPPED
         return [("sweep", "—", "—", "—"), ("--models all, one material",
                                            f"{total:.1f} s", "—", "—")]
     times = {}
@@ -184,9 +198,15 @@ def section(ctx: Context) -> Section:
             return load_bsdf({"type": "merl", "filename": str(path)})
 
         rows = [_efficiency(ctx, s, label, tabulated(spec, f"m{i}"), target)
+                if not (ctx.quick and i > 0) else _skipped_material(s, label)
                 for i, (label, spec, target) in enumerate(MATERIALS)]
-        cost = _cost(ctx, s, tabulated(COST_SOURCE, "cost"))
-        files = [str(Path(folder) / f"m{i}.binary") for i in range(len(MATERIALS))]
+        if ctx.quick:  # validation/merl_layout.py --quick runs render_cost
+            s.values["merl vs cooktorrance, render time"] = SKIPPED
+            cost = ("—", "—", SKIPPED)
+        else:
+            cost = _cost(ctx, s, tabulated(COST_SOURCE, "cost"))
+        files = [str(Path(folder) / f"m{i}.binary")
+                 for i in range(len(MATERIALS) if not ctx.quick else 1)]
         costs = _fit_costs(ctx, s, Path(folder), files)
     s.markdown = "\n".join([
         "The `merl` plugin on materials of known BSDFs tabulated by `mi-brdfs measure`. Its "

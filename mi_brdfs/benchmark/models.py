@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..bsdfspec import load_bsdf
-from ..campaign.core import Context, Row, Section, md_table
+from ..campaign.core import SKIPPED, Context, Row, Section, md_table
 from ..checks import batch
 from ..materials import conductor_ior
 from ..reference import cooktorrance as ref
@@ -128,8 +128,9 @@ def scalar_cost(a, b, ctx: Context):
 def _costs(ctx: Context) -> tuple[dict, dict]:
     """({label: jit_cost}, {label: scalar_cost}) of every pair of CHOICES and DISABLED: the JIT
     ones first, then the scalar ones in one switch of variant (each switch reloads Mitsuba's
-    Python modules); sample() choices have no scalar cost."""
-    pairs = CHOICES + DISABLED
+    Python modules); sample() choices have no scalar cost. Quick: the first of each
+    (:data:`SKIPPED`)."""
+    pairs = CHOICES + DISABLED if not ctx.quick else CHOICES[:1] + DISABLED[:1]
     jit = {label: jit_cost(a, b, ctx, sample=label.endswith("(sample)"))
            for label, a, b in pairs}
     with ctx.scalar():
@@ -159,6 +160,10 @@ def section(ctx: Context) -> Section:
     rows = []
     jit, scalar = _costs(ctx)
     for label, _, _ in CHOICES:
+        if label not in jit:
+            s.values[f"model: {label}"] = SKIPPED
+            rows.append((label, "—", "—", "—", SKIPPED, "—"))
+            continue
         ta, tb, ratio = jit[label]
         s.values[f"model: {label}"] = f"{ratio:.2f}×"
         per_call = "—"  # sample() choices: no scalar cost
@@ -173,6 +178,10 @@ def section(ctx: Context) -> Section:
         s.values[f"schlick: {label}, ΔE(75°)"] = albedo
     lobes = []
     for label, _, _ in DISABLED:
+        if label not in jit:
+            s.values[f"disabled: {label}"] = SKIPPED
+            lobes.append((label, "—", "—", SKIPPED, "—"))
+            continue
         (ta, tb, ratio), (sa, sb, sratio) = jit[label], scalar[label]
         s.values[f"disabled: {label}"] = f"{ratio:.2f}×"
         lobes.append((label, f"{ta:.3f} s", f"{tb:.3f} s", f"**{ratio:.2f}×**",

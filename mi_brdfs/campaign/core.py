@@ -18,6 +18,11 @@ from ..markdown import md_table  # noqa: F401 (the sections import it from here)
 from ..progress import Progress
 
 
+#: What a quick run names in place of a figure it leaves unmeasured: a quick bench measures the
+#: first pair, material or choice of a table alone, since each contender is a kernel to compile.
+SKIPPED = "— (quick run)"
+
+
 @dataclass
 class Context:
     """What every section gets: where to write, how thorough to be, the variants."""

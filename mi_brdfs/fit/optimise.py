@@ -5,6 +5,7 @@ transformed variables (see :mod:`mi_brdfs.fit`).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -105,6 +106,19 @@ def objective_np(metric: str, values, wi, wo, target_values) -> float:
     return float(np.mean(metric_weights(metric, wi, wo) * np.sum(diff ** 2, axis=1)) / 3.0)
 
 
+@functools.lru_cache(maxsize=1)
+def _above_horizon() -> np.ndarray:
+    """The MERL bins whose centre (φh = 0) has both directions more than 10⁻³ above the
+    horizon, in the bins' order: flags built once (the directions of every bin take tenths of
+    a second, and every fit to a MERL file, and every score of one, asks)."""
+    from ..measured import merl
+
+    wi, wo = merl.bin_directions()
+    above = (wi[:, 2] > 1e-3) & (wo[:, 2] > 1e-3)
+    above.flags.writeable = False
+    return above
+
+
 def measured_pairs(path, pairs: int, seed: int = 0):
     """
     (wi, wo, f·cosθo (m, 3)): ``pairs`` bins of a MERL file drawn at random (seeded, without
@@ -115,9 +129,8 @@ def measured_pairs(path, pairs: int, seed: int = 0):
 
     values = merl.read(path)
     theta_h, theta_d, phi_d = (a.ravel() for a in merl.bin_centres())
-    wi, wo = merl.directions(theta_h, 0.0, theta_d, phi_d)
     flat = np.moveaxis(values, 0, -1).reshape(-1, 3)
-    ok = np.flatnonzero((wi[:, 2] > 1e-3) & (wo[:, 2] > 1e-3) & ~np.isnan(flat).any(axis=1))
+    ok = np.flatnonzero(_above_horizon() & ~np.isnan(flat).any(axis=1))
     rng = np.random.default_rng(seed)
     pick = np.sort(rng.choice(ok, size=min(pairs, len(ok)), replace=False))
     wi, wo = merl.directions(theta_h[pick], rng.uniform(-np.pi, np.pi, len(pick)),
