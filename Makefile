@@ -16,7 +16,7 @@ PYTEST_ARGS ?=
 # The documents whose quoted figures make validate and make bench fill in from their reports
 QUOTING := $(foreach f,README.md $(wildcard docs/*.md),--readme $(f))
 
-.PHONY: all setup system render test test-full bench validate audit figures docs gallery clean distclean
+.PHONY: all setup system render test test-slow test-full bench validate audit figures docs gallery clean distclean
 
 all: test
 
@@ -45,8 +45,12 @@ test: $(STAMP)
 	if [ $$rc -eq 5 ]; then echo "make test: pytest collected no tests (exit 5)"; exit 1; fi; \
 	exit $$rc
 
-# The tests marked slow as well: the plugin matrix's every cell in every llvm variant (about
-# 5 min more on 2 cores with an empty kernel cache)
+# The tests marked slow (tests/tiers.py lists them and says what the quick tier keeps of each;
+# the matrix's every cell in every llvm variant): CI runs them after `make test`
+test-slow: $(STAMP)
+	@$(PY) -m pytest -n 2 -m slow $(PYTEST_ARGS)
+
+# Both tiers in one run
 test-full: $(STAMP)
 	@$(PY) -m pytest -n 2 $(PYTEST_ARGS)
 

@@ -73,3 +73,44 @@ def variants_all(request):
 @pytest.fixture
 def np_rng():
     return np.random.default_rng(12345)
+
+
+def _tiers(items, slow=None) -> list:
+    """Mark ``slow`` the tests ``slow`` (default :data:`tiers.SLOW`) lists; return the entries
+    that name no collected test of a file collected."""
+    from tiers import SLOW
+
+    slow = SLOW if slow is None else slow
+    by_function = {}
+    for item in items:
+        path, _, name = item.nodeid.partition("::")
+        function, _, ident = name.partition("[")
+        by_function.setdefault((path, function), []).append((item, ident[:-1]))
+    stale = []
+    for path, entries in slow.items():
+        if not any(p == path for p, _ in by_function):
+            continue
+        for function, entry in entries.items():
+            instances = by_function.get((path, function))
+            ids = entry[1] if isinstance(entry, tuple) else None
+            if not instances:
+                stale.append(f"{path}::{function}")
+                continue
+            for want in ids if ids is not None else [None]:
+                chosen = [item for item, ident in instances
+                          if want is None or ident == want or
+                          (want.endswith("*") and ident.startswith(want[:-1]))]
+                if not chosen:
+                    stale.append(f"{path}::{function}[{want}]")
+                for item in chosen:
+                    item.add_marker(pytest.mark.slow)
+    return stale
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    stale = _tiers(items)
+    # stale entries are judged where whole files were collected (not `pytest file::test`)
+    if stale and all("::" not in arg for arg in config.args):
+        raise pytest.UsageError("tests/tiers.py names tests that are not there: " +
+                                ", ".join(stale))

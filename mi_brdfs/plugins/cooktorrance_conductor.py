@@ -15,7 +15,9 @@ from types import SimpleNamespace
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
+from ..reference import multiscatter as reference
 from ..scattering import fresnel, microfacet, multiscatter, vector
 from . import lobes, properties
 
@@ -48,13 +50,19 @@ class MicrofacetReflection(lobes.Lobe):
         self.fresnel, self.fresnel_term = fresnel, FRESNEL_TERMS[fresnel]
         self.eta, self.k, self.specular = eta, k, specular
         self.flags, self.table = flags, table
-        #: F_avg where the index is the same everywhere and for every wavelength (no texture,
-        #: not a spectral variant): a constant of the material, computed once, not per lookup
-        self.f_avg = None
-        if table is not None and fresnel != "none" and not mi.is_spectral and \
+        #: F_avg where the index is the same everywhere (no texture): computed once, not per
+        #: lookup. In RGB and mono variants a constant per channel; in spectral variants a
+        #: table over the visible wavelengths (:class:`SpectralAverage`), looked up at the
+        #: sampled ones (the quadrature inside every lookup made a compensated conductor's
+        #: kernel about three times larger than the rest of it, and as slow to compile).
+        self.f_avg = self.f_avg_table = None
+        if table is not None and fresnel != "none" and \
                 not (eta.is_spatially_varying() or k.is_spatially_varying()):
-            self.f_avg = self._fresnel_average(dr.zeros(mi.SurfaceInteraction3f), True)
-            dr.make_opaque(self.f_avg)
+            if mi.is_spectral:
+                self.f_avg_table = SpectralAverage(self)
+            else:
+                self.f_avg = self._fresnel_average(dr.zeros(mi.SurfaceInteraction3f), True)
+                dr.make_opaque(self.f_avg)
 
     def distribution(self, si, active) -> microfacet.Distribution:
         """The microfacet distribution at ``si``."""
@@ -141,13 +149,17 @@ class MicrofacetReflection(lobes.Lobe):
         """F_avg of the Fresnel term at ``si``, per channel (None for ``fresnel`` 'none')."""
         if self.fresnel == "none":
             return None
-        return self.f_avg if self.f_avg is not None else self._fresnel_average(si, active)
+        if self.f_avg is not None:
+            return self.f_avg
+        if self.f_avg_table is not None:
+            return self.f_avg_table(si.wavelengths)
+        return self._fresnel_average(si, active)
 
-    def _fresnel_average(self, si, active):
+    def _fresnel_average(self, si, active, nodes: int = 5):
         eta = properties.clip_at(self.eta, si, active, 0.0, fresnel.IOR_MAX)
         k = properties.clip_at(self.k, si, active, 0.0, fresnel.IOR_MAX)
         if self.fresnel == "exact":
-            return multiscatter.fresnel_average(eta, k)
+            return multiscatter.fresnel_average(eta, k, nodes)
         return multiscatter.schlick_average(fresnel.r0(eta, k))
 
     def _reflect(self, ctx, si, wo, t, factor, active):
@@ -217,3 +229,62 @@ def _factor(f_avg, e_avg):
     without a Fresnel term (``f_avg`` None)."""
     factor = multiscatter.lobe(0.0, 0.0, e_avg)
     return factor if f_avg is None else factor * multiscatter.multiple_fresnel(f_avg, e_avg)
+
+
+class SpectralAverage:
+    """
+    F_avg of an index that is the same everywhere, as a function of the wavelength: tabulated
+    at every :data:`STEP` nm of Mitsuba's visible range [MI_CIE_MIN, MI_CIE_MAX] by a 32-node
+    rule (computed once), and interpolated linearly at the wavelengths a lookup samples. The
+    error is the interpolation's: h²/8 of F_avg's second derivative in λ, and where the index
+    is itself tabulated (a named conductor's) up to the step times the jump of F_avg's slope
+    at each of its nodes: within 2e-5 for gold
+    (``tests/plugins/test_cooktorrance_multiscatter.py::test15_spectral_f_avg_table``),
+    below the 5-node rule's 7e-5 that a lookup would use.
+    In JIT variants the table is built with drjit operations from the textures of η and k, so
+    that a derivative with respect to them (``mi.traverse``) reaches F_avg through it; in scalar
+    variants, which have no derivatives, by the float64 reference's quadrature.
+    """
+
+    #: The table's step (nm): 1881 nodes; the error at a kink is proportional to it.
+    STEP = 0.25
+
+    def __init__(self, lobe):
+        self.lo = mi.MI_CIE_MIN
+        self.n = int(round((mi.MI_CIE_MAX - self.lo) / self.STEP)) + 1
+        channels = len(mi.UnpolarizedSpectrum(0.0))
+        lanes = -(-self.n // channels)
+        # channel c of lane w holds node w·channels + c (the last node repeated to fill a lane)
+        nodes = np.minimum(np.arange(lanes * channels), self.n - 1).reshape(lanes, channels)
+        lam = self.lo + self.STEP * nodes
+        if dr.is_jit_v(mi.Float):
+            si = dr.zeros(mi.SurfaceInteraction3f, lanes)
+            si.wavelengths = mi.UnpolarizedSpectrum(lam.T)
+            values, self.table = lobe._fresnel_average(si, True, 32), \
+                dr.zeros(mi.Float, lanes * channels)
+            for c in range(channels):
+                dr.scatter(self.table, values[c], dr.arange(mi.UInt32, lanes) * channels + c)
+            dr.make_opaque(self.table)
+            return
+        # scalar variants (no derivatives): η and k per lane, F_avg by the float64 reference
+        eta, k = np.empty(lam.shape), np.empty(lam.shape)
+        si = dr.zeros(mi.SurfaceInteraction3f)
+        for w in range(lanes):
+            si.wavelengths = mi.UnpolarizedSpectrum(lam[w])
+            eta[w] = np.clip(np.array(lobe.eta.eval(si)), 0.0, fresnel.IOR_MAX)
+            k[w] = np.clip(np.array(lobe.k.eval(si)), 0.0, fresnel.IOR_MAX)
+        self.table = [float(v) for v in reference.fresnel_average(
+            lobe.fresnel, eta.reshape(-1), k.reshape(-1), 32)]
+
+    def __call__(self, wavelengths):
+        """F_avg at each channel's wavelength (clamped to the table's range)."""
+        out = []
+        for c in range(len(wavelengths)):
+            x = dr.clip((wavelengths[c] - self.lo) / self.STEP, 0.0, self.n - 1.0)
+            i = dr.minimum(mi.UInt32(x), self.n - 2)  # x ≥ 0: truncation is the floor
+            t = x - mi.Float(i)
+            out.append(dr.lerp(self._at(i), self._at(i + 1), t))
+        return mi.UnpolarizedSpectrum(out)
+
+    def _at(self, i):
+        return dr.gather(mi.Float, self.table, i) if dr.is_jit_v(mi.Float) else self.table[i]

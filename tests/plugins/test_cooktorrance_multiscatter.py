@@ -266,3 +266,32 @@ def test14_gradient_through_alpha(variant_llvm_ad_rgb):
 
     h = 1e-3
     assert grad == pytest.approx((at(0.6 + h) - at(0.6 - h)) / (2 * h), rel=2e-2)
+
+
+@pytest.mark.parametrize("variant", ["scalar_spectral", "llvm_ad_spectral"])
+def test15_spectral_f_avg_table(variant, np_rng):
+    """In spectral variants F_avg of an index the same everywhere (gold's tabulated η, k) is a
+    table over the wavelengths: at random wavelengths it equals the float64 quadrature of the
+    exact Fresnel term at the index there, within float32 rounding and the interpolation
+    (largest at the kinks of gold's tabulated index; a table a quarter of a nanometre off,
+    one node, is 1.2e-4 away)."""
+    from conftest import set_variant
+
+    set_variant(variant)
+    bsdf = mi.load_dict({"type": CT, "multiscatter": True, "material": "Au"})
+    lobe = bsdf.lobes.lobes[0]
+    assert lobe.f_avg_table is not None
+    lam = np_rng.uniform(mi.MI_CIE_MIN, mi.MI_CIE_MAX, (4, 64))
+    lam[0, :2] = (mi.MI_CIE_MIN, mi.MI_CIE_MAX)
+    got, eta, k = [], [], []
+    for column in lam.T if not dr.is_jit_v(mi.Float) else [lam]:
+        si = dr.zeros(mi.SurfaceInteraction3f, 1 if column.ndim == 1 else column.shape[1])
+        si.wavelengths = mi.UnpolarizedSpectrum(column)
+        got.append(np.array(lobe.fresnel_average(si, True)))
+        eta.append(np.array(lobe.eta.eval(si)))
+        k.append(np.array(lobe.k.eval(si)))
+    got, eta, k = (np.array(a, dtype=np.float64).reshape(-1) for a in (got, eta, k))
+    # the same order in all three: the wavelength, η and k of each channel of each lane
+    want = ref_ms.fresnel_average("exact", eta, k)
+    assert got.shape == want.shape == (256,)
+    assert np.abs(got - want).max() < 2e-5, np.abs(got - want).max()
