@@ -165,6 +165,10 @@ ROWS: tuple[Row, ...] = (
          ("principled, roughness 0.4", {"source": "principled roughness=0.4"}))),
     Row("he", "westin reading, τ = 3 µm, Al", {"type": "he", "tau": 3.0, "material": "Al"},
         tuple((f"σ0 = {s:g} µm", {"sigma0": s}) for s in (0.02, 0.08, 0.3))),
+    Row("rtls", "Ross-Thick Li-Sparse (MODIS), f_iso = 0.2", {"type": "rtls", "f_iso": 0.2},
+        (("f_vol = f_geo = 0 (Lambert)", {"f_vol": 0.0, "f_geo": 0.0}),
+         ("volume: f_vol = 0.3", {"f_vol": 0.3, "f_geo": 0.0}),
+         ("shadows: f_geo = 0.05", {"f_vol": 0.0, "f_geo": 0.05}))),
 )
 
 # The layout, in pixels (the PNG is written at DPI dots per inch, so 1 pt = DPI/72 px).

@@ -50,6 +50,7 @@ PLUGINS = {
     "lafortune": ("mi_brdfs.plugins.lafortune", "Lafortune"),
     "merl": ("mi_brdfs.plugins.merl", "Merl"),
     "he": ("mi_brdfs.plugins.he", "He"),
+    "rtls": ("mi_brdfs.plugins.rtls", "RTLS"),
 }
 
 # variant -> {plugin id -> class}

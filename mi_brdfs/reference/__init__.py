@@ -3,7 +3,8 @@ Float64 NumPy reference implementations of the package's models: the oracle for 
 the validation campaign, written independently of the plugins. The models (``lambert.py``,
 ``phong.py``, ``cooktorrance.py``, ``ward.py``, ``orennayar.py``, ``quadrature.py``, and
 ``ngan.py``: the models of Ngan et al.'s fits as bbm defines them,
-``he.py``: He, Torrance, Sillion & Greenberg 1991 in three readings, no plugin yet) use NumPy
+``he.py``: He, Torrance, Sillion & Greenberg 1991 in three readings, ``rtls.py``: the
+Ross-Thick Li-Sparse-Reciprocal kernels of MODIS) use NumPy
 alone; only :func:`for_spec` and :func:`color` here ask Mitsuba which variant is set (RGB
 colours mean something else in spectral variants) and parse specs through
 :mod:`mi_brdfs.bsdfspec`.
@@ -105,7 +106,21 @@ def for_spec(spec):
         return _cooktorrance(spec)
     if kind == "he":
         return _he(spec)
+    if kind == "rtls":
+        return _rtls(spec)
     return None
+
+
+def _rtls(spec):
+    """The reference of an ``rtls`` dict (its defaults those of :mod:`.rtls`'s plugin);
+    None for textures."""
+    from .rtls import RTLS
+    weights = [color(spec.get(name), default) for name, default in
+               (("f_iso", 0.209741), ("f_vol", 0.081384), ("f_geo", 0.004140))]
+    shape = [spec.get(name, default) for name, default in (("h", 2.0), ("r", 1.0), ("b", 1.0))]
+    if any(w is None for w in weights) or not all(isinstance(x, (int, float)) for x in shape):
+        return None
+    return RTLS(*weights, *shape)
 
 
 def _he(spec):

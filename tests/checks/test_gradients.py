@@ -47,10 +47,11 @@ PLUGINS = [spec_of(name) for name in registry.PLUGINS] + [
 ]
 
 
-#: The pdfs detached by design, per plugin: he's sampling density is tabulated from its
-#: surface's parameters when they are set (a table has no derivative), and its sampling
+#: The pdfs detached by design, per plugin: he's and rtls's sampling densities are tabulated
+#: from their parameters when they are set (a table has no derivative), and he's sampling
 #: probabilities are detached from them alike.
-DETACHED_PDF = {"he": {"sigma0", "tau", "eta.value", "k.value"}}
+DETACHED_PDF = {"he": {"sigma0", "tau", "eta.value", "k.value"},
+                "rtls": {"f_iso.value", "f_vol.value", "f_geo.value"}}
 
 
 @pytest.mark.parametrize("spec", PLUGINS, ids=lambda s: "-".join(str(v) for v in s.values()))

@@ -46,6 +46,8 @@ BOUNDS = {
            {"sigma0": 0.0, "tau": 1e-3, "variant": "holzschuch"},
            {"sigma0": 1e3, "tau": 1e4, "variant": "paper"},
            {"sigma0": 1e3, "tau": 1e-3}, {"sigma0": 0.05, "tau": 1e4, "material": "Au"}],
+    "rtls": [{"f_iso": f, "f_vol": f, "f_geo": f, "h": h, "r": r, "b": b}
+             for f in (0.0, 1.0) for h, r, b in ((1e-3, 1e3, 1e-3), (1e3, 1e-3, 1e3))],
 }
 
 
