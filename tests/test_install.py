@@ -50,9 +50,11 @@ def installed(tmp_path_factory):
 
 
 def test01_wheel_installs_imports_and_renders_outside_the_checkout(installed):
-    """One installation (the wheel build takes seconds), used two ways."""
+    """One installation (the wheel build takes seconds), used three ways, in one test: two
+    tests would each build it where pytest-xdist runs them in two processes."""
     _imports_from_outside_the_checkout(installed)
     _the_command_renders_the_bundled_showcase(installed)
+    _the_wheel_carries_the_fits_and_their_licence(installed)
 
 
 def _imports_from_outside_the_checkout(installed):
@@ -77,7 +79,7 @@ def _the_command_renders_the_bundled_showcase(installed):
     assert out.with_suffix(".png").is_file()
 
 
-def test02_the_wheel_carries_the_fits_and_their_licence(installed):
+def _the_wheel_carries_the_fits_and_their_licence(installed):
     """mi_brdfs/data/ngan (bbm's fit files, its BSD licence, the README naming the source)
     is in the wheel, and the installed package reads it."""
     import zipfile
