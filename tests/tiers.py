@@ -89,6 +89,7 @@ SLOW = {
         "test04_ctrl_c_keeps_what_is_done": (MORE, ["SIGTERM"]),
     },
     "tests/cli/test_cli_checks.py": {
+        "test02b_the_json_is_strict": DEEP,
         "test04_furnace_table_and_render": WHOLE,
         "test05_plots": (MORE, ["albedo", "slice"]),
     },
@@ -499,6 +500,7 @@ SLOW = {
         "test04_schlick_r0_against_gold": DEEP,
         "test05_fitted_spec_is_written_as_the_spec_takes_it": DEEP,
         "test06_deterministic": DEEP,
+        "test09_cli_writes_json": DEEP,
         "test10_cli_bad_input_exit_2_one_line": (MORE, [
             "args2-fit needs an RGB variant with automatic differentiation",
             "args5---model names 2 BSDFs; give one"]),
@@ -569,7 +571,8 @@ SLOW = {
         "test05_bad_input_one_line_exit_2": (MORE, [
             "nobsdf.xml", "tiny.xml --report /proc/x", "tiny.xml -D spp=4",
             "tiny.xml -D res=0", "tiny.xml --confidence -1"]),
-        "test07_speedup_bars_from_the_spread_of_repeats": (MORE, ["consistently-faster"]),
+        "test07_speedup_bars_from_the_spread_of_repeats": DEEP,
+        "test10b_included_files_left_alone_are_named": DEEP,
         "test10d_a_define_the_replacement_no_longer_references": DEEP,
         "test11_ashikhmin_and_lafortune_candidates": DEEP,
         "test21_simplicity_replaces_by_a_simpler_candidate_not_slower": (MORE, [
