@@ -86,3 +86,14 @@ clean:
 
 distclean: clean
 	rm -rf $(VENV)
+
+# Eradiate's rtls values, validation/eradiate/rtls.json (tests/plugins/test_rtls_eradiate.py
+# compares against them): its Mitsuba fork in a virtual environment of its own, .venv-eradiate
+# (it cannot share a process with the project's Mitsuba), at the versions the committed table
+# was made with (the fork does not pin drjit)
+ERADIATE_PINS := eradiate-mitsuba==0.5.0 drjit==1.2.0
+.PHONY: eradiate-values
+eradiate-values:
+	@test -x .venv-eradiate/bin/python || $(PYTHON) -m venv .venv-eradiate
+	.venv-eradiate/bin/python -m pip install --disable-pip-version-check -q $(ERADIATE_PINS)
+	.venv-eradiate/bin/python validation/eradiate/values.py

@@ -1,0 +1,133 @@
+"""
+The ``rtls`` plugin against Eradiate's: the committed table validation/eradiate/rtls.json
+(``make eradiate-values``: Eradiate's ``rtls`` of ``eradiate-mitsuba``, evaluated in a virtual
+environment of its own, at fixed pairs and parameter sets, in float32 and float64). Where
+Eradiate's value is finite and non-negative the plugin's equals it, within float32 rounding
+and Eradiate's cancellation at the hot spot (:func:`cancellation`); where it is negative the
+plugin's is 0 (the clamp); where it is not finite the plugin's is finite. The cases of each
+kind are counted (the plugin's docstring quotes them); a plugin with f_vol and f_geo swapped
+fails the comparison.
+"""
+
+import json
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import CONDITIONING_FACTOR, reference_conditioning
+
+from mi_brdfs.checks.batch import interaction, vectors
+from mi_brdfs.errors import MiBrdfsWarning
+from mi_brdfs.reference import rtls as ref
+from mi_brdfs.scattering import rtls as kernels
+
+TABLE = Path(__file__).resolve().parents[2] / "validation" / "eradiate" / "rtls.json"
+#: Two float32 evaluations of the kernels (Eradiate's and the plugin's), each within 10⁻⁵ of
+#: the model away from the horizon (test_rtls.RTOL); the directions' rounding is the
+#: conditioning, as in helpers.assert_matches_reference.
+RTOL = 2e-5
+#: The unit roundoff of each of Eradiate's variants (:func:`cancellation`).
+UNIT = {"scalar_rgb": 2.0 ** -24, "scalar_mono_double": 2.0 ** -53}
+#: (agree, Eradiate negative, Eradiate not finite) per parameter set and Eradiate variant, of
+#: the table's 705 pairs: what the plugin's docstring quotes.
+COUNTS = {
+    ("defaults", "scalar_rgb"): (691, 0, 14), ("defaults", "scalar_mono_double"): (629, 0, 76),
+    ("example", "scalar_rgb"): (559, 132, 14), ("example", "scalar_mono_double"): (497, 132, 76),
+    ("crowns", "scalar_rgb"): (510, 181, 14), ("crowns", "scalar_mono_double"): (448, 181, 76),
+    ("volume", "scalar_rgb"): (663, 28, 14), ("volume", "scalar_mono_double"): (601, 28, 76),
+}
+
+
+def load_table():
+    """(wi (n, 3), wo (n, 3), {set name: params}, {(set, variant): values (n,)})."""
+    data = json.loads(TABLE.read_text())
+    rows = data["rows"]
+    wi, wo = (np.array([r[k] for r in rows], dtype=np.float64) for k in (1, 2))
+    columns = {tuple(c.split()): np.array([float(r[i]) for r in rows])
+               for i, c in enumerate(data["columns"]) if i >= 3}
+    return wi, wo, data["sets"], columns
+
+
+def plugin_values(params, wi, wo):
+    """The plugin's eval at every pair: one array call (channel 0; the weights are grey)."""
+    import mitsuba as mi
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MiBrdfsWarning)  # the clamp's warning at load
+        bsdf = mi.load_dict({"type": "rtls", **params})
+    value = bsdf.eval(mi.BSDFContext(), interaction(wi, len(wi)), vectors(wo))
+    return np.array(value[0], dtype=np.float64)
+
+
+def model(params):
+    """The float64 model's f·cosθo, unclamped (mi_brdfs.reference.rtls): the conditioning."""
+    m = ref.RTLS(**params)
+    return lambda wi, wo: m.brf(wi, wo)[:, 0] / math.pi * wo[:, 2]
+
+
+def cancellation(params, wi, wo, unit):
+    """
+    The error of Eradiate's f·cosθo from its D = √(tan²θi' + tan²θo' − 2 tanθi' tanθo' cos φ)
+    (src/bsdfs/rtls.cpp), which cancels at the hot spot (D = 0): D² off by δ = 4u(tanθi' +
+    tanθo')² (u the unit roundoff; the three terms rounded, cos φ from the azimuths' sines
+    and cosines) moves D by √(D² + δ) − D, √δ at the hot spot; cos t = (h/b)√(D² + …)/(secθi'
+    + secθo') and |dO/dcos t| ≤ 2(secθi' + secθo')/π move O, and the BRF, by at most
+    f_geo (2/π)(h/b) that. The plugin takes D = |pi − po| from the vectors, without it.
+    """
+    h, r, b = (params.get(k, d) for k, d in (("h", ref.H), ("r", ref.R), ("b", ref.B)))
+    f_geo = params.get("f_geo", ref.RTLS().f_geo[0])
+    p_i, p_o = ((b / r) * w[:, :2] / w[:, 2:3] for w in (wi, wo))  # |p| = tanθ'
+    d = np.linalg.norm(p_i - p_o, axis=1)
+    delta = 4 * unit * (np.linalg.norm(p_i, axis=1) + np.linalg.norm(p_o, axis=1)) ** 2
+    return f_geo * (2 / np.pi) * (h / b) * (np.sqrt(d ** 2 + delta) - d) * wo[:, 2] / np.pi
+
+
+def compare(ours, theirs, params, wi, wo, variant, what):
+    """The rules of the module's docstring; (agree, negative, not finite) counts. Where
+    Eradiate's value is negative by less than the tolerance, the plugin's may be that close
+    to 0 (the two round differently)."""
+    finite = np.isfinite(theirs)
+    cond = reference_conditioning(model(params), wi, wo)
+    expected = np.maximum(theirs, 0.0)
+    tol = (RTOL + CONDITIONING_FACTOR * cond) * np.abs(theirs) + \
+        1e-6 * np.abs(theirs[finite]).max() + cancellation(params, wi, wo, UNIT[variant])
+    bad = finite & ~(np.abs(ours - expected) <= tol)
+    bad |= (theirs < -tol) & (ours != 0)
+    bad |= ~finite & ~np.isfinite(ours)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise AssertionError(
+            f"{what}: {bad.sum()} pairs differ from Eradiate's, e.g. {ours[i]:.7g} against "
+            f"{theirs[i]:.7g} at wi = {wi[i]}, wo = {wo[i]} (tolerance {tol[i]:.3g})")
+    return int((finite & (theirs >= 0)).sum()), int((theirs < 0).sum()), int((~finite).sum())
+
+
+def test01_equal_to_eradiate(variant_llvm_ad_rgb):
+    """Per parameter set, against Eradiate's float32 and float64 values, with the counts of
+    :data:`COUNTS`."""
+    wi, wo, sets, columns = load_table()
+    counts = {}
+    for name, params in sets.items():
+        ours = plugin_values(params, wi, wo)
+        assert np.all(ours >= 0) and np.all(np.isfinite(ours)), name
+        for (set_name, variant), theirs in columns.items():
+            if set_name == name:
+                counts[name, variant] = compare(ours, theirs, params, wi, wo, variant,
+                                                f"rtls {name} against Eradiate's {variant}")
+    assert counts == COUNTS
+
+
+def test02_a_swapped_kernel_fails(variant_llvm_ad_rgb, monkeypatch):
+    """A plugin whose f_vol weighs K_geo and f_geo K_vol fails the comparison."""
+    def swapped(f_iso, f_vol, f_geo, wi, wo, h_over_b, b_over_r):
+        return f_iso + f_geo * kernels.ross_thick(wi, wo) + \
+            f_vol * kernels.li_sparse_r(wi, wo, h_over_b, b_over_r)
+
+    monkeypatch.setattr(kernels, "brf", swapped)
+    wi, wo, sets, columns = load_table()
+    params = sets["example"]
+    with pytest.raises(AssertionError, match="differ from Eradiate's"):
+        compare(plugin_values(params, wi, wo), columns["example", "scalar_rgb"], params, wi, wo,
+                "scalar_rgb", "rtls swapped")
