@@ -252,29 +252,20 @@ class SpectralAverage:
     def __init__(self, lobe):
         self.lo = mi.MI_CIE_MIN
         self.n = int(round((mi.MI_CIE_MAX - self.lo) / self.STEP)) + 1
-        channels = len(mi.UnpolarizedSpectrum(0.0))
-        lanes = -(-self.n // channels)
-        # channel c of lane w holds node w·channels + c (the last node repeated to fill a lane)
-        nodes = np.minimum(np.arange(lanes * channels), self.n - 1).reshape(lanes, channels)
-        lam = self.lo + self.STEP * nodes
+        lam = self.lo + self.STEP * np.arange(self.n)  # node j in lane j, in every channel
         if dr.is_jit_v(mi.Float):
-            si = dr.zeros(mi.SurfaceInteraction3f, lanes)
-            si.wavelengths = mi.UnpolarizedSpectrum(lam.T)
-            values, self.table = lobe._fresnel_average(si, True, 32), \
-                dr.zeros(mi.Float, lanes * channels)
-            for c in range(channels):
-                dr.scatter(self.table, values[c], dr.arange(mi.UInt32, lanes) * channels + c)
+            si = dr.zeros(mi.SurfaceInteraction3f, self.n)
+            si.wavelengths = mi.UnpolarizedSpectrum(mi.Float(lam))
+            self.table = mi.Float(lobe._fresnel_average(si, True, 32)[0])
             dr.make_opaque(self.table)
             return
-        # scalar variants (no derivatives): η and k per lane, F_avg by the float64 reference
-        eta, k = np.empty(lam.shape), np.empty(lam.shape)
-        si = dr.zeros(mi.SurfaceInteraction3f)
-        for w in range(lanes):
-            si.wavelengths = mi.UnpolarizedSpectrum(lam[w])
-            eta[w] = np.clip(np.array(lobe.eta.eval(si)), 0.0, fresnel.IOR_MAX)
-            k[w] = np.clip(np.array(lobe.k.eval(si)), 0.0, fresnel.IOR_MAX)
-        self.table = [float(v) for v in reference.fresnel_average(
-            lobe.fresnel, eta.reshape(-1), k.reshape(-1), 32)]
+        # scalar variants (no derivatives): η and k node by node, F_avg by the float64 reference
+        si, index = dr.zeros(mi.SurfaceInteraction3f), np.empty((2, self.n))
+        for j, wavelength in enumerate(lam):
+            si.wavelengths = mi.UnpolarizedSpectrum(wavelength)
+            index[:, j] = [float(tex.eval(si)[0]) for tex in (lobe.eta, lobe.k)]
+        index = np.clip(index, 0.0, fresnel.IOR_MAX)
+        self.table = [float(v) for v in reference.fresnel_average(lobe.fresnel, *index, 32)]
 
     def __call__(self, wavelengths):
         """F_avg at each channel's wavelength (clamped to the table's range)."""

@@ -101,16 +101,12 @@ def _reflects(value):
     return dr.any(mi.unpolarized_spectrum(value) > 0)
 
 
-class Tabulated(lobes.TabulatedLobe):
-    """The model where its weights are constant: sampled from its tabulated density."""
+class _Clamped:
+    """What both samplings share: the value from the :class:`Surface`, and a pdf of 0 where
+    the clamp makes f 0 (:func:`_reflects`)."""
 
     def __init__(self, surface: Surface):
         self.surface, self.component = surface, 0
-
-    @property
-    def sampler(self) -> warp.Sampler:
-        """Built when first needed (``eval`` alone needs none: a fit builds none)."""
-        return self.surface.sampler()
 
     def value(self, si, wo, active):
         return self.surface.value(si, wo, active)
@@ -119,7 +115,17 @@ class Tabulated(lobes.TabulatedLobe):
         value, pdf = super().eval_pdf(ctx, si, wo, active)
         return value, dr.select(_reflects(value), pdf, 0.0)
 
+
+class Tabulated(_Clamped, lobes.TabulatedLobe):
+    """The model where its weights are constant: sampled from its tabulated density."""
+
+    @property
+    def sampler(self) -> warp.Sampler:
+        """Built when first needed (``eval`` alone needs none: a fit builds none)."""
+        return self.surface.sampler()
+
     def sample_alone(self, ctx, si, sample1, sample2, active):
+        """The tabulated lobe's own (it reads the density its draw returns, not eval_pdf)."""
         wo, ok, weight, pdf = super().sample_alone(ctx, si, sample1, sample2, active)
         return wo, ok, weight, dr.select(_reflects(weight), pdf, 0.0)
 
@@ -127,21 +133,11 @@ class Tabulated(lobes.TabulatedLobe):
         return self.sampler.albedo(si.wi)
 
 
-class Cosine(lobes.CosineLobe):
+class Cosine(_Clamped, lobes.CosineLobe):
     """The model where a weight varies over the surface: sampled from the cosine-weighted
     hemisphere."""
 
     kind, flags = "GlossyReflection", lobes.flag("GlossyReflection", "FrontSide")
-
-    def __init__(self, surface: Surface):
-        self.surface, self.component = surface, 0
-
-    def value(self, si, wo, active):
-        return self.surface.value(si, wo, active)
-
-    def eval_pdf(self, ctx, si, wo, active):
-        value, pdf = super().eval_pdf(ctx, si, wo, active)
-        return value, dr.select(_reflects(value), pdf, 0.0)
 
     def weight(self, ctx, si, active):
         """f_iso: the BRF's mean level, an estimate of the albedo."""
@@ -205,9 +201,10 @@ class RTLS(mi.BSDF):
     −∞ as the view grazes away from the hot spot (at normal incidence K_geo = O − ½ −
     ½ secθo): every f_geo > 0 makes the BRF negative near the horizon (the defaults below 0
     beyond θo ≈ 89.5° at normal incidence), and f_vol > 7.2 f_iso makes it so where K_vol
-    reaches its least, −0.139 (forward scattering, θi = θo ≈ 34°). The plugin evaluates max(BRF, 0)/π, which keeps every value
-    and sample weight non-negative. Where the three weights are the same everywhere, it warns
-    at load, in one line, naming them, the share of direction pairs where the clamp acts
+    reaches its least, −0.139 (forward scattering, θi = θo ≈ 34°). The plugin evaluates
+    max(BRF, 0)/π, which keeps every value and sample weight non-negative. Where the three
+    weights are the same everywhere, it warns at load, in one line, naming them, the share
+    of direction pairs where the clamp acts
     (weighted by cosθi cosθo, the white-sky measure) and the lowest BRF with its directions,
     from the float64 model on a grid of 32 cosines (to 89.92°) and 16 azimuths. At the hot
     spot K_geo = sec²θ − secθ grows without bound towards the horizon instead: the values are
