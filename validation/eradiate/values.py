@@ -1,16 +1,16 @@
 #!/usr/bin/env python3
 """
-Eradiate's ``rtls`` plugin (src/bsdfs/rtls.cpp of its Mitsuba fork, ``eradiate-mitsuba`` on
-PyPI) evaluated at fixed direction pairs and parameter sets: the table
-``validation/eradiate/rtls.json`` that tests/plugins/test_rtls_eradiate.py compares the
-``rtls`` plugin of mi_brdfs against.
+Eradiate's reflectance plugins (src/bsdfs/*.cpp of its Mitsuba fork, ``eradiate-mitsuba`` on
+PyPI) evaluated at fixed direction pairs and parameter sets: the tables
+``validation/eradiate/<plugin>.json`` that tests/plugins/test_<plugin>_eradiate.py compare the
+plugins of mi_brdfs against (:data:`PLUGINS`: ours, Eradiate's of the same meaning, the sets).
 
 Runs only in a virtual environment holding ``eradiate-mitsuba``, never in the project's: the
 fork is a Mitsuba of its own and cannot share a process with Mitsuba 3.9. It imports nothing
 of mi_brdfs; the values go through the JSON file alone.
 
     make eradiate-values                       # creates .venv-eradiate/ and runs this
-    .venv-eradiate/bin/python validation/eradiate/values.py [--out PATH]
+    .venv-eradiate/bin/python validation/eradiate/values.py [--plugin NAME] [--out PATH]
 
 The pairs: a grid over θi, θo (nadir, 10°-75°, near grazing 85°-89°) and the relative azimuth
 φ (0° and 180°: the principal plane; 45°, 90°, 135°), exact backscatter ωo = ωi (the hot
@@ -37,11 +37,15 @@ VARIANTS = ("scalar_rgb", "scalar_mono_double")
 #: Eradiate's defaults; the weights of the plugin's docstring example; the same with crowns
 #: of h/b = 1.5, b/r = 2; a surface whose volume kernel drives the BRF below 0 (f_vol > 7.2
 #: f_iso, where K_vol reaches its least, -0.139).
-SETS = {
+RTLS = {
     "defaults": {},
     "example": {"f_iso": 0.2, "f_vol": 0.1, "f_geo": 0.03},
     "crowns": {"f_iso": 0.2, "f_vol": 0.1, "f_geo": 0.03, "h": 3.0, "r": 1.0, "b": 2.0},
     "volume": {"f_iso": 0.01, "f_vol": 0.2, "f_geo": 0.0},
+}
+#: Each plugin of mi_brdfs: Eradiate's plugin of the same model and the parameter sets.
+PLUGINS = {
+    "rtls": ("rtls", RTLS),
 }
 THETA_I = (0, 10, 30, 45, 60, 75, 85, 87, 88, 89)
 THETA_O = (0, 10, 30, 45, 60, 75, 85, 86, 87, 88, 89)
@@ -89,11 +93,11 @@ def encode(x: float):
     return x if math.isfinite(x) else str(x)
 
 
-def evaluate(variant: str, params: dict, wi: list, wo: list) -> list:
-    """eval (f·cosθo) of Eradiate's ``rtls`` at each pair, in ``variant`` (one channel: the
-    weights are the same in every channel)."""
+def evaluate(plugin: str, variant: str, params: dict, wi: list, wo: list) -> list:
+    """eval (f·cosθo) of Eradiate's ``plugin`` at each pair, in ``variant`` (one channel: the
+    parameters are the same in every channel)."""
     mi.set_variant(variant)
-    bsdf = mi.load_dict({"type": "rtls", **params})
+    bsdf = mi.load_dict({"type": plugin, **params})
     ctx, out = mi.BSDFContext(), []
     for a, b in zip(wi, wo):
         si = dr.zeros(mi.SurfaceInteraction3f)
@@ -109,19 +113,22 @@ def evaluate(variant: str, params: dict, wi: list, wo: list) -> list:
     return out
 
 
-def table() -> dict:
-    """The whole table: the versions, the parameter sets, the columns and one row per pair
-    (kind, wi, wo, then eval for each set in each variant)."""
+def table(name: str) -> dict:
+    """The whole table of our plugin ``name``: the versions, Eradiate's plugin, the parameter
+    sets, the columns and one row per pair (kind, wi, wo, then eval for each set in each
+    variant)."""
     from importlib.metadata import version
 
+    plugin, sets = PLUGINS[name]
     wi, wo, kind = pairs()
-    columns = {f"{name} {v}": evaluate(v, params, wi, wo)
-               for name, params in SETS.items() for v in VARIANTS}
+    columns = {f"{set_name} {v}": evaluate(plugin, v, params, wi, wo)
+               for set_name, params in sets.items() for v in VARIANTS}
     return {
-        "generator": "validation/eradiate/values.py (make eradiate-values)",
+        "generator": f"validation/eradiate/values.py --plugin {name} (make eradiate-values)",
+        "eradiate_plugin": plugin,
         "eradiate_mitsuba": version("eradiate-mitsuba"),
         "mitsuba": mi.__version__, "drjit": dr.__version__,
-        "variants": list(VARIANTS), "sets": SETS,
+        "variants": list(VARIANTS), "sets": sets,
         "value": "eval: f cos(theta_o), one channel",
         "columns": ["kind", "wi", "wo", *columns],
         "rows": [[k, a, b, *(c[i] for c in columns.values())]
@@ -139,15 +146,26 @@ def write(data: dict, path: Path) -> None:
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--out", type=Path,
-                        default=Path(__file__).resolve().parent / "rtls.json")
+    parser.add_argument("--plugin", choices=sorted(PLUGINS), action="append",
+                        help="the plugin of mi_brdfs (repeatable; default: every one)")
+    parser.add_argument("--out", type=Path, help="the table's file (one --plugin only; "
+                        "default: validation/eradiate/<plugin>.json)")
     args = parser.parse_args(argv)
-    data = table()
-    write(data, args.out)
-    assert json.loads(args.out.read_text()) == json.loads(json.dumps(data))
+    names = args.plugin or sorted(PLUGINS)
+    if args.out and len(names) > 1:
+        parser.error("--out names the file of one --plugin")
+    for name in names:
+        _write_table(name, args.out or Path(__file__).resolve().parent / f"{name}.json")
+
+
+def _write_table(name: str, out: Path) -> None:
+    """Evaluate and write the table of ``name``, and say what it holds."""
+    data = table(name)
+    write(data, out)
+    assert json.loads(out.read_text()) == json.loads(json.dumps(data))
     off = {c: sum(isinstance(r[i], str) or r[i] < 0 for r in data["rows"])
            for i, c in enumerate(data["columns"]) if i >= 3}
-    print(f"{args.out}: {len(data['rows'])} pairs, eradiate-mitsuba "
+    print(f"{out}: {len(data['rows'])} pairs, eradiate-mitsuba "
           f"{data['eradiate_mitsuba']}; negative or non-finite values per column: {off}")
 
 
