@@ -9,51 +9,22 @@ are constant, else from the cosine-weighted hemisphere.
 from __future__ import annotations
 
 import functools
-from collections import OrderedDict
 
 import drjit as dr
 import mitsuba as mi
 
-from ..measured import warp
 from ..reference import rtls as reference
 from ..scattering import rtls as kernels
-from . import lobes, properties
+from . import empirical, lobes, properties
 
 PLUGIN = "rtls"
 #: The kernel weights' defaults: Eradiate's (its C++ code; RAMI4ATM's Sentinel-2A band 8A).
 DEFAULTS = {"f_iso": 0.209741, "f_vol": 0.081384, "f_geo": 0.004140}
 #: The range of each of the crowns' shape parameters h, r, b.
 SHAPE_RANGE = (1e-3, 1e3)
-#: The tabulated samplers of this variant by (f_iso, f_vol, f_geo, h/b, b/r): the latest
-#: :data:`KEPT` (an optimisation moves the weights at every step).
-_samplers: OrderedDict = OrderedDict()
-KEPT = 16
 #: The grid of :meth:`mi_brdfs.reference.rtls.RTLS.negative_share` for the warning at load:
 #: cosθ's nodes reach 89.92°, where the defaults are negative.
 GRID = (32, 16)
-
-
-def constant(tex) -> float | None:
-    """The value of a texture that is the same everywhere (its mean over the channels), or
-    None for one that varies over the surface or cannot say."""
-    if tex.is_spatially_varying():
-        return None
-    try:
-        return properties.as_float(tex.mean())
-    except RuntimeError:  # mesh_attribute and others without a mean
-        return None
-
-
-def _channels(props, name: str, tex) -> list[float] | None:
-    """A weight's value per channel where the scene gives a float or an <rgb>, else its
-    constant value (:func:`constant`), None where it varies over the surface."""
-    T = mi.Properties.Type
-    if name in props and props.type(name) in (T.Float, T.Integer):
-        return [float(props[name])]
-    if name in props and props.type(name) == T.Color:
-        return [float(c) for c in props[name]]
-    value = constant(tex)
-    return None if value is None else [value]
 
 
 @functools.lru_cache(maxsize=64)
@@ -62,86 +33,29 @@ def negative(f_iso: tuple, f_vol: tuple, f_geo: tuple, h: float, r: float, b: fl
     return reference.RTLS(f_iso, f_vol, f_geo, h, r, b).negative_share(*GRID)
 
 
-class Surface:
-    """The kernel weights (textures) and the crowns' shape h/b, b/r as the lobes use them."""
+class Surface(empirical.Surface):
+    """The kernel weights (textures) and the crowns' shape h, r, b as the lobe uses them;
+    constant weights clipped into [0, 1]."""
 
-    def __init__(self, f_iso, f_vol, f_geo, h: float, r: float, b: float):
-        self.f = (f_iso, f_vol, f_geo)
-        self.h, self.r, self.b = h, r, b
-        #: (f_iso, f_vol, f_geo) where each is the same everywhere (clipped into [0, 1]),
-        #: else None: the tabulated density's parameters
-        values = [constant(tex) for tex in self.f]
-        self.constants = None if any(v is None for v in values) else \
-            tuple(min(max(v, 0.0), 1.0) for v in values)
+    plugin = PLUGIN
+
+    def clip(self, values):
+        return tuple(min(max(v, 0.0), 1.0) for v in values)
 
     def value(self, si, wo, active):
         """f·cosθo = max(BRF, 0)/π·cosθo, per channel; each weight clipped into [0, 1]."""
-        f_iso, f_vol, f_geo = (properties.clip_at(tex, si, active) for tex in self.f)
-        brf = kernels.brf(f_iso, f_vol, f_geo, si.wi, wo, self.h / self.b, self.b / self.r)
+        f_iso, f_vol, f_geo = (properties.clip_at(tex, si, active)
+                               for tex in self.textures.values())
+        h, r, b = self.shape
+        brf = kernels.brf(f_iso, f_vol, f_geo, si.wi, wo, h / b, b / r)
         return dr.maximum(brf, 0.0) * (dr.inv_pi * wo.z)
 
-    def sampler(self) -> warp.Sampler:
-        """The sampler of the model at the weights' constant values (shared by every
-        instance of this surface), built from the float64 reference."""
-        key = (*self.constants, self.h, self.r, self.b)
-        if key not in _samplers:
-            model = reference.RTLS(*key)
-            _samplers[key] = warp.Sampler(*warp.density(
-                lambda wi, wo: model.brdf(wi, wo).mean(axis=-1)))
-            while len(_samplers) > KEPT:
-                _samplers.popitem(last=False)
-        _samplers.move_to_end(key)
-        return _samplers[key]
-
-
-def _reflects(value):
-    """Where f·cosθo is positive in some channel: elsewhere the clamp made f 0, the sample
-    fails and its pdf is 0 (the density's mass there is the probability of failing). A
-    polarized value is a depolarizer's Mueller matrix: its (0, 0) element is f·cosθo."""
-    return dr.any(mi.unpolarized_spectrum(value) > 0)
-
-
-class _Clamped:
-    """What both samplings share: the value from the :class:`Surface`, and a pdf of 0 where
-    the clamp makes f 0 (:func:`_reflects`)."""
-
-    def __init__(self, surface: Surface):
-        self.surface, self.component = surface, 0
-
-    def value(self, si, wo, active):
-        return self.surface.value(si, wo, active)
-
-    def eval_pdf(self, ctx, si, wo, active):
-        value, pdf = super().eval_pdf(ctx, si, wo, active)
-        return value, dr.select(_reflects(value), pdf, 0.0)
-
-
-class Tabulated(_Clamped, lobes.TabulatedLobe):
-    """The model where its weights are constant: sampled from its tabulated density."""
-
-    @property
-    def sampler(self) -> warp.Sampler:
-        """Built when first needed (``eval`` alone needs none: a fit builds none)."""
-        return self.surface.sampler()
-
-    def sample_alone(self, ctx, si, sample1, sample2, active):
-        """The tabulated lobe's own (it reads the density its draw returns, not eval_pdf)."""
-        wo, ok, weight, pdf = super().sample_alone(ctx, si, sample1, sample2, active)
-        return wo, ok, weight, dr.select(_reflects(weight), pdf, 0.0)
-
-    def weight(self, ctx, si, active):
-        return self.sampler.albedo(si.wi)
-
-
-class Cosine(_Clamped, lobes.CosineLobe):
-    """The model where a weight varies over the surface: sampled from the cosine-weighted
-    hemisphere."""
-
-    kind, flags = "GlossyReflection", lobes.flag("GlossyReflection", "FrontSide")
-
-    def weight(self, ctx, si, active):
+    def level(self, si, active):
         """f_iso: the BRF's mean level, an estimate of the albedo."""
-        return dr.mean(properties.clip_at(self.surface.f[0], si, active))
+        return dr.mean(properties.clip_at(self.textures["f_iso"], si, active))
+
+    def reference(self):
+        return reference.RTLS(*self.constants, *self.shape)
 
 
 class RTLS(mi.BSDF):
@@ -284,7 +198,8 @@ class RTLS(mi.BSDF):
 
     def _warn_negative(self, props):
         """Warn (the clamp documented) where the model goes below 0 for constant weights."""
-        values = [_channels(props, name, tex) for name, tex in zip(DEFAULTS, self._weights())]
+        values = [empirical.channels(props, name, tex)
+                  for name, tex in zip(DEFAULTS, self._weights())]
         if any(v is None for v in values):
             return
         share, low, (ti, to, phi) = negative(*(tuple(v) for v in values),
@@ -304,9 +219,8 @@ class RTLS(mi.BSDF):
     def parameters_changed(self, keys=()):
         """The lobe from the weights as they are now: tabulated where all three are the same
         everywhere (its sampler built when first needed, for their values then)."""
-        surface = Surface(*self._weights(), self.m_h, self.m_r, self.m_b)
-        lobe = Cosine(surface) if surface.constants is None else Tabulated(surface)
-        self.lobes = lobes.Mixture([lobe])
+        surface = Surface(dict(zip(DEFAULTS, self._weights())), (self.m_h, self.m_r, self.m_b))
+        self.lobes = empirical.lobe(surface)
 
     def traverse(self, cb):
         for name, tex in zip(DEFAULTS, self._weights()):
