@@ -71,6 +71,8 @@ figures: $(STAMP)
 	@mkdir -p $(OUT)
 	$(VENV)/bin/mi-brdfs render showcase -o $(OUT)/showcase-hq.exr --spp 256 -D res=320 -q --force
 	cp $(OUT)/showcase-hq.png docs/showcase.png
+	$(VENV)/bin/mi-brdfs render earth -o $(OUT)/earth-hq.exr --spp 512 -D res=256 -D width=768 -q --force
+	cp $(OUT)/earth-hq.png docs/earth.png
 
 # The plugin reference, docs/plugins/*.md, generated from the plugins' docstrings
 docs: $(STAMP)
@@ -97,3 +99,14 @@ eradiate-values:
 	@test -x .venv-eradiate/bin/python || $(PYTHON) -m venv .venv-eradiate
 	.venv-eradiate/bin/python -m pip install --disable-pip-version-check -q $(ERADIATE_PINS)
 	.venv-eradiate/bin/python validation/eradiate/values.py
+
+# The audit of Eradiate's fork (Mitsuba's built-ins as the fork ships them, and Eradiate's
+# plugins): validation/audit/eradiate.md, validation/audit/eradiate/ (findings.json, the
+# reproducers, the resumable cache .cache). Sets up .venv-eradiate with ERADIATE_PINS, NumPy and
+# this package without its dependencies (the fork is its Mitsuba)
+.PHONY: audit-eradiate
+audit-eradiate:
+	@test -x .venv-eradiate/bin/python || $(PYTHON) -m venv .venv-eradiate
+	.venv-eradiate/bin/python -m pip install --disable-pip-version-check -q $(ERADIATE_PINS) numpy
+	.venv-eradiate/bin/python -m pip install --disable-pip-version-check -q --no-deps -e .
+	.venv-eradiate/bin/mi-brdfs audit --out validation --force

@@ -180,15 +180,21 @@ def plugin_kind(name: str) -> str:
     'BSDF', 'Texture', 'Shape', ... or 'Unknown' for a plugin name in the current variant.
 
     ``PluginManager.plugin_type`` knows Python plugins only in the variant where they were
-    registered first, so a plugin it calls Unknown is instantiated to find out.
+    registered first, so a plugin it calls Unknown is instantiated to find out, at its defaults:
+    whatever that instance warns of (rpv's energy at its defaults) is not the user's BSDF's, and
+    is not shown.
     """
+    import warnings
+
     import mitsuba as mi
 
     kind = str(mi.PluginManager.instance().plugin_type(name)).split(".")[-1]
     if kind != "Unknown":
         return kind
     try:
-        obj = mi.load_dict({"type": name})
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            obj = mi.load_dict({"type": name})
     except RuntimeError as e:
         return "Unknown" if "not found" in str(e) else "BSDF"  # exists, but needs parameters
     for kind in ("BSDF", "Texture", "Shape", "Emitter", "Sensor", "Integrator"):

@@ -169,6 +169,17 @@ ROWS: tuple[Row, ...] = (
         (("f_vol = f_geo = 0 (Lambert)", {"f_vol": 0.0, "f_geo": 0.0}),
          ("volume: f_vol = 0.3", {"f_vol": 0.3, "f_geo": 0.0}),
          ("shadows: f_geo = 0.05", {"f_vol": 0.0, "f_geo": 0.05}))),
+    Row("rpv", "Rahman-Pinty-Verstraete, ρ0 = 0.1", {"type": "rpv", "rho_0": 0.1},
+        (("bell: k = 1.4, g = 0", {"k": 1.4}),
+         ("bowl: k = 0.6, backward g = −0.3", {"k": 0.6, "g": -0.3}),
+         ("forward: k = 0.9, g = 0.3", {"k": 0.9, "g": 0.3}))),
+    Row("hapke", "Hapke's regolith, w = 0.3, b = 0.25, c = 0.7",
+        {"type": "hapke", "w": 0.3, "b": 0.25, "c": 0.7},
+        (("smooth: θ̄ = 0°", {"theta": 0.0}),
+         ("rough: θ̄ = 30°", {"theta": 30.0}),
+         ("surge: θ̄ = 20°, B_0 = 1, h = 0.06", {"theta": 20.0, "B_0": 1.0, "h": 0.06}))),
+    Row("ocean", "Cox & Munk's sea, water η = 1.33", {"type": "ocean"},
+        tuple((f"U = {u:g} m/s", {"wind_speed": u}) for u in (1.0, 5.0, 15.0))),
 )
 
 # The layout, in pixels (the PNG is written at DPI dots per inch, so 1 pt = DPI/72 px).

@@ -1,7 +1,9 @@
 """
 Plots of BSDFs in the manner of Disney's BRDF Explorer, with matplotlib (``pip install
 mi-brdfs[plots]``): the polar lobe in the plane of incidence, the directional albedo over the
-incident angle, and the (θh, θd) image slice. Each takes several BSDFs, to compare them.
+incident angle, and the (θh, θd) image slice; and the principal-plane plot of Earth
+observation (the BRF against the view zenith, :mod:`mi_brdfs.earth`). Each takes several
+BSDFs, to compare them.
 """
 
 from __future__ import annotations
@@ -185,4 +187,33 @@ def plot_slice(specs, path, res: int = 128, phi_d_deg: float = 90.0) -> str:
     axes[0].set_ylabel("θd (degrees)")
     fig.colorbar(shown, ax=list(axes), shrink=0.85, label="f (1/sr)")
     fig.suptitle(f"BRDF slice at φd = {phi_d_deg:g}°", fontsize=10)
+    return save_figure(fig, path)
+
+
+def plot_principal_plane(specs, path, thetas_deg=None) -> str:
+    """The BRF = π·f in the principal plane (:func:`mi_brdfs.earth.principal_plane`), one
+    panel per sun zenith, every BSDF in each: backward (the sun's side, the hot spot) right
+    of the zenith, forward (the specular side) left."""
+    from .earth import SUN_ZENITHS, principal_plane
+
+    plt = pyplot()
+    suns = tuple(thetas_deg) if thetas_deg else SUN_ZENITHS
+    planes = [principal_plane(spec, suns) for spec in specs]
+    fig, axes = plt.subplots(1, len(suns), figsize=(4.2 * len(suns), 3.6),
+                             squeeze=False)
+    for k, (ax, sun) in enumerate(zip(axes[0], suns)):
+        for plane in planes:
+            ax.plot(plane.view_zenith_deg, _luminance(plane.brf[k]), lw=1.4,
+                    label=describe(plane.spec))
+        ax.axvline(sun, color="0.6", lw=0.8, ls=":")  # the hot spot
+        ax.axhline(1.0, color="0.8", lw=0.8, ls="--")  # a white Lambertian surface
+        ax.set_xlim(-90, 90)
+        ax.set_xticks(range(-90, 91, 30))
+        ax.set_title(f"sun zenith θi = {sun:g}° (dotted: the hot spot)", fontsize=9)
+        ax.set_xlabel("view zenith θo (degrees): < 0 forward, > 0 backward", fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel("BRF = π·f (1: white Lambertian)")
+    axes[0, -1].legend(loc="upper left", bbox_to_anchor=(1.03, 1.0), fontsize=8)
+    fig.suptitle("BRF in the principal plane (forward: the specular side; backward: the "
+                 "sun's side)", fontsize=10)
     return save_figure(fig, path)

@@ -51,6 +51,9 @@ PLUGINS = {
     "merl": ("mi_brdfs.plugins.merl", "Merl"),
     "he": ("mi_brdfs.plugins.he", "He"),
     "rtls": ("mi_brdfs.plugins.rtls", "RTLS"),
+    "rpv": ("mi_brdfs.plugins.rpv", "RPV"),
+    "hapke": ("mi_brdfs.plugins.hapke", "Hapke"),
+    "ocean": ("mi_brdfs.plugins.ocean", "Ocean"),
 }
 
 # variant -> {plugin id -> class}
@@ -66,6 +69,42 @@ def builtin_plugin_names() -> set[str]:
         return set()
 
 
+#: Mitsuba's forks on the package index: their distribution installs the ``mitsuba`` package.
+FORKS = ("eradiate-mitsuba",)
+
+
+def mitsuba_build() -> tuple[str, str]:
+    """The distribution that installed ``mitsuba`` and its version: ``("mitsuba", "3.9.1")``,
+    or a fork's (:data:`FORKS`), e.g. ``("eradiate-mitsuba", "0.5.0")`` (Mitsuba 3.7.1 with
+    Eradiate's plugins, https://github.com/eradiate/mitsuba3)."""
+    from importlib import metadata
+
+    for name in FORKS:
+        try:
+            return name, metadata.version(name)
+        except metadata.PackageNotFoundError:
+            pass
+    return "mitsuba", mi.__version__
+
+
+def own_plugins(builtins: set, build: tuple) -> list[str]:
+    """
+    The ids of :data:`PLUGINS` to register with a Mitsuba whose own plugins are ``builtins``,
+    installed by ``build`` (:func:`mitsuba_build`). Mitsuba's plugins are never shadowed: under
+    Mitsuba itself an id of ours among them is a bug (RuntimeError); a fork's own plugin of
+    that name (Eradiate's ``rtls``) is the one the fork's scenes mean, so ours is left out and
+    a warning says so, once per process.
+    """
+    clash = [name for name in PLUGINS if name in builtins]
+    if clash and build[0] == "mitsuba":
+        raise RuntimeError(f"mi_brdfs: plugin id '{clash[0]}' shadows a Mitsuba built-in")
+    if clash and build not in _warned:
+        _warned.add(build)
+        warnings.warn(f"mi_brdfs: {build[0]} {build[1]} ships its own {', '.join(clash)}: "
+                      f"those are used, not mi_brdfs's", MiBrdfsWarning, stacklevel=3)
+    return [name for name in PLUGINS if name not in builtins]
+
+
 def register() -> list[str]:
     """
     Register every plugin of the package in the current Mitsuba variant.
@@ -79,11 +118,9 @@ def register() -> list[str]:
     if variant is None:
         return []
     if variant not in _classes:
-        builtins = builtin_plugin_names()
         classes = {}
-        for name, (module, class_name) in PLUGINS.items():
-            if name in builtins:  # would silently replace Mitsuba's plugin for this variant
-                raise RuntimeError(f"mi_brdfs: plugin id '{name}' shadows a Mitsuba built-in")
+        for name in own_plugins(builtin_plugin_names(), mitsuba_build()):
+            module, class_name = PLUGINS[name]
             cls = getattr(_load_for_variant(module), class_name)
             mi.register_bsdf(name, _constructor(name, cls))
             classes[name] = cls

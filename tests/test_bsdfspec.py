@@ -232,3 +232,16 @@ def test11_an_object_of_another_variant_or_no_bsdf_is_one_line(variant_scalar_rg
         text = str(info.value)
         assert text.startswith(f"a {name} loaded in scalar_rgb cannot be used in llvm_ad_rgb")
         assert "\n" not in text, text
+
+
+def test12_the_kind_of_a_plugin_warns_nothing(variants_rgb):
+    """``plugin_kind`` instantiates a plugin at its defaults where Mitsuba cannot say (a Python
+    plugin in the variant registered second): rpv's defaults create energy and warn at load, a
+    warning about a BSDF the user did not give. It says BSDF and warns nothing, in both
+    variants (one of them takes the instantiating path)."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert bsdfspec.plugin_kind("rpv") == "BSDF"
+    assert not caught, [str(w.message) for w in caught]

@@ -77,7 +77,7 @@ SLOW = {
             "eval_detached", "eval_sign", "weight_sign"]),
         "test02_every_plugin_passes": (MORE, [
             "phong", "ward", "orennayar", "ashikhmin", "lafortune", "merl-*", "he", "rtls",
-            "phong-original-halfway", "cooktorrance-0.3-smith-ggx-0.6",
+            "rpv", "ocean", "hapke", "phong-original-halfway", "cooktorrance-0.3-smith-ggx-0.6",
             "cooktorrance-True-0.5-Au", "cooktorrance-True-0.5", "cooktorrance-True-True-0.45",
             "orennayar-full", "ashikhmin-10.0-200.0", "ward-0.1-0.3",
             "lafortune-20.0-1.0-1.0-1.0"]),
@@ -307,6 +307,13 @@ SLOW = {
         "test10_consistent_and_efficient": DEEP,
         "test12_one_load_per_file": DEEP,
     },
+    "tests/plugins/test_ocean.py": {
+        "test06_finite_and_non_negative_at_the_singular_places": (MORE, ["llvm_ad_rgb"]),
+        "test09_polarized_variants": (MORE, ["llvm_ad_spectral_polarized"]),
+        "test12_visible_normal_sampling": DEEP,
+        "test13_reciprocal": DEEP,
+        "test14_without_shadowing_the_albedo_exceeds_1": DEEP,
+    },
     "tests/plugins/test_orennayar.py": {
         "test01_create": (MORE, ["llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono"]),
         "test02_eval_against_reference": (MORE, ["llvm_ad_rgb-qualitative", "llvm_ad_rgb-full"]),
@@ -372,6 +379,21 @@ SLOW = {
         "test02_loadable_from_xml": (MORE, ["llvm_ad_rgb", "llvm_ad_spectral", "llvm_ad_mono"]),
         "test03_register_is_idempotent": (MORE, ["llvm_ad_rgb"]),
         "test04_no_builtin_is_shadowed": (MORE, ["llvm_ad_rgb"]),
+    },
+    "tests/plugins/test_hapke.py": {
+        "test05_eval_is_the_reference": (MORE, ["llvm_ad_rgb"]),
+        "test09_reciprocal_and_consistent": DEEP,
+        "test10_opposition_sampling": DEEP,
+        "test11_parameters_through_traverse": DEEP,
+    },
+    "tests/plugins/test_rpv.py": {
+        "test03_eval_is_the_reference": (MORE, ["scalar_rgb"]),
+        "test07_reciprocal_and_consistent": DEEP,
+        "test08_hot_spot_sampling": DEEP,
+    },
+    "tests/plugins/test_rtls_modis.py": {
+        "test05_the_fit_recovers_an_rtls_targets_weights": DEEP,
+        "test06_the_fit_to_another_bsdf_is_the_linear_inversion": (MORE, ["roughplastic"]),
     },
     "tests/plugins/test_textures.py": {
         "test01_procedural_texture_out_of_range_is_rejected": (MORE, [

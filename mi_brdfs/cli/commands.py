@@ -86,10 +86,12 @@ def cmd_furnace(args) -> int:
     specs = _bsdfs(args.bsdf)
     for spec in specs:
         curve = albedo_curve(spec, thetas, n=args.samples, progress=True)
-        print(f"\ndirectional albedo of {describe(spec)} ({variant}; brightest channel)")
+        print(f"\ndirectional albedo of {describe(spec)} (the black-sky albedo at sun zenith "
+              f"θ; {variant}; brightest channel)")
         print(curve.table())
         for note in curve.notes:
             print(f"note: {note}")
+        _white_sky(spec, args.samples)
     if args.render:
         result = check_furnace(specs[0], spp=args.spp, res=args.res, n=args.samples)
         r = result.details["render"]
@@ -104,11 +106,29 @@ def cmd_furnace(args) -> int:
     return 0
 
 
+def _white_sky(spec, samples) -> None:
+    """``furnace``'s white-sky albedo lines: the estimate, and the float64 model's own where
+    it has one in closed form (``rtls``: its kernels' published integrals)."""
+    from .. import reference
+    from ..earth import white_sky_albedo
+
+    print(white_sky_albedo(spec, n=samples).line())
+    model = reference.for_spec(spec)
+    if hasattr(model, "white_sky"):
+        value = float(max(model.white_sky()))
+        print(f"white-sky albedo of the float64 model ({type(model).__module__}, unclamped, "
+              f"from its kernels' integrals): {value:.5f}")
+
+
 def cmd_plot(args) -> int:
     import mi_brdfs
     from .. import plots
+    from ..errors import MiBrdfsError
 
     thetas = _thetas(args.thetas)
+    if args.kind == "pp" and thetas and max(thetas) >= 90:
+        raise MiBrdfsError(f"plot pp: --thetas {args.thetas}: sun zeniths must lie in [0, 90) "
+                           f"degrees (the BRF needs the sun above the horizon)")
     (out,) = _planned(args, args.output, f"{args.kind}.png")
     mi_brdfs.use_variant(args.variant)
     specs = _bsdfs(args.bsdf)
@@ -117,6 +137,8 @@ def cmd_plot(args) -> int:
                         cosine=not args.no_cos)
     elif args.kind == "albedo":
         plots.plot_albedo(specs, out, thetas, n=args.samples)
+    elif args.kind == "pp":
+        plots.plot_principal_plane(specs, out, thetas)
     else:
         plots.plot_slice(specs, out, res=args.res)
     print(f"wrote {out}")

@@ -85,6 +85,7 @@ MODES = {
         Mode("plot albedo", "plot albedo", lambda a: a.kind == "albedo",
              {"--thetas": None, "-n/--samples": None}),
         Mode("plot slice", "plot slice", lambda a: a.kind == "slice", {"--res": 128}),
+        Mode("plot pp", "plot pp", lambda a: a.kind == "pp", {"--thetas": None}),
     ),
     "render": (
         Mode("a render without its PNG preview (--no-png)", "--no-png", lambda a: a.no_png),

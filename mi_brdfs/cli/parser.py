@@ -203,15 +203,18 @@ def _add_furnace(sub) -> None:
 
 def _add_plot(sub) -> None:
     """``mi-brdfs plot``."""
-    pl = _bsdf_command(sub, "plot", "lobe, albedo or (θh, θd) slice plots (PNG)",
+    pl = _bsdf_command(sub, "plot", "lobe, albedo, (θh, θd) slice or principal-plane plots",
                        "Plots like Disney's BRDF Explorer: 'lobe' (polar, plane of incidence, "
                        "several incident angles), 'albedo' (E(θ)), 'slice' (f over θh, θd at "
-                       "φd = 90°). Several BSDFs share one figure.",
-                       (("kind",), {"choices": ["lobe", "albedo", "slice"]}))
+                       "φd = 90°); and Earth observation's 'pp' (the BRF = π·f against the view "
+                       "zenith in the principal plane, backward > 0, forward < 0, one panel per "
+                       "sun zenith). Several BSDFs share one figure.",
+                       (("kind",), {"choices": ["lobe", "albedo", "slice", "pp"]}))
     pl.add_argument("-o", "--output", metavar="OUT.png", type=_output(".png", ".pdf", ".svg"),
                     help="default: ./<kind>.png")
     _add_force(pl, "the default output")
-    pl.add_argument("--thetas", metavar="DEG,...", help="incident angles (lobe, albedo)")
+    pl.add_argument("--thetas", metavar="DEG,...",
+                    help="incident angles (lobe, albedo), sun zeniths (pp; default 0,30,60)")
     pl.add_argument("--log", action="store_true", help="logarithmic radius (lobe)")
     pl.add_argument("--no-cos", action="store_true", help="plot f instead of f·cosθo (lobe)")
     pl.add_argument("--res", type=_count, help="slice resolution (slice; default 128)")

@@ -39,7 +39,8 @@ after every step to the image of the parameter's valid range (each plugin's docs
 * ``lafortune``'s coefficients ``cx_i``, ``cy_i``, ``cz_i``: x = C, of any sign (with its
   default ``normalize`` the lobe depends on C/max|C| only, so C and λC are one lobe: leave one
   coefficient fixed, e.g. ``cx_i`` and ``cy_i`` at −1 with ``cz_i`` free);
-* reflectances and transmittances: x = ρ ∈ [0, 1]; any other parameter: x = v ≥ 0.
+* reflectances, transmittances and ``rtls``'s kernel weights: x = ρ ∈ [0, 1]; any other
+  parameter: x = v ≥ 0.
 
 A numbered parameter of ``lafortune`` (``exponent_1``, ``specular_reflectance_1``) is fitted as
 the parameter of its kind is.

@@ -30,6 +30,9 @@ _SIGNED = ("cx", "cy", "cz")
 #: Parameters with the spectrum's channels (fitted per RGB channel) among texture-valued ones.
 _SPECTRAL_NAMES = ("eta", "k", "base_color")
 
+#: The kernel weights of ``rtls``, within [0, 1] as the plugin takes them.
+_KERNEL_WEIGHTS = ("f_iso", "f_vol", "f_geo")
+
 #: Beckmann-type plugins whose ``alpha`` is the lobe width (built-ins included).
 _MICROFACET = ("cooktorrance", "roughconductor", "roughplastic", "roughdielectric", "ward")
 
@@ -59,7 +62,7 @@ def _bounds(name: str):
         return "log", 1e-3, 10.0
     if name == "tau":
         return "log", 1e-2, 1e3
-    if name.endswith(("reflectance", "transmittance")):
+    if name.endswith(("reflectance", "transmittance")) or name in _KERNEL_WEIGHTS:
         return "linear", 0.0, 1.0
     return "linear", 0.0, math.inf
 

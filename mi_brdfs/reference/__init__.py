@@ -4,8 +4,8 @@ the validation campaign, written independently of the plugins. The models (``lam
 ``phong.py``, ``cooktorrance.py``, ``ward.py``, ``orennayar.py``, ``quadrature.py``, and
 ``ngan.py``: the models of Ngan et al.'s fits as bbm defines them,
 ``he.py``: He, Torrance, Sillion & Greenberg 1991 in three readings, ``rtls.py``: the
-Ross-Thick Li-Sparse-Reciprocal kernels of MODIS) use NumPy
-alone; only :func:`for_spec` and :func:`color` here ask Mitsuba which variant is set (RGB
+Ross-Thick Li-Sparse-Reciprocal kernels of MODIS, ``rpv.py``: Rahman-Pinty-Verstraete,
+``ocean.py``: Cox & Munk's sea surface) use NumPy alone; only :func:`for_spec` and :func:`color` here ask Mitsuba which variant is set (RGB
 colours mean something else in spectral variants) and parse specs through
 :mod:`mi_brdfs.bsdfspec`.
 
@@ -108,7 +108,28 @@ def for_spec(spec):
         return _he(spec)
     if kind == "rtls":
         return _rtls(spec)
+    if kind == "hapke":
+        return _hapke(spec)
+    if kind == "rpv":
+        return _rpv(spec)
+    if kind == "ocean":
+        return _ocean(spec)
     return None
+
+
+def _ocean(spec):
+    """The reference of an ``ocean`` dict (the plugin's defaults); None for textures."""
+    from .ocean import Ocean
+    index = [color(spec.get(name), default) for name, default in
+             (("eta", 1.33), ("k", 0.0), ("ext_ior", 1.000277))]
+    whitecaps = spec.get("whitecaps", False)
+    whitecaps = None if whitecaps is False else color(0.22 if whitecaps is True else whitecaps)
+    scalars = [spec.get(name, d) for name, d in (("wind_speed", 0.1), ("wind_direction", None))]
+    if any(x is None for x in index) or ("whitecaps" in spec and whitecaps is None) or \
+            not all(isinstance(x, (int, float, type(None))) for x in scalars):
+        return None
+    return Ocean(scalars[0], *index, wind_direction=scalars[1], whitecaps=whitecaps,
+                 shadowing=spec.get("shadowing", True))
 
 
 def _rtls(spec):
@@ -121,6 +142,25 @@ def _rtls(spec):
     if any(w is None for w in weights) or not all(isinstance(x, (int, float)) for x in shape):
         return None
     return RTLS(*weights, *shape)
+
+
+def _rpv(spec):
+    """The reference of an ``rpv`` dict (Eradiate's defaults, ρc = ρ0 unless given); None for
+    textures."""
+    from .rpv import K, RHO_0, RPV, G
+    rho_0 = color(spec.get("rho_0"), RHO_0)
+    rest = [color(spec.get(name), default) for name, default in
+            (("k", K), ("g", G), ("rho_c", rho_0))]
+    if rho_0 is None or any(x is None for x in rest):
+        return None
+    return RPV(rho_0, *rest)
+
+
+def _hapke(spec):
+    """The reference of a ``hapke`` dict (Eradiate's defaults); None for textures."""
+    from .hapke import DEFAULTS, Hapke
+    values = [color(spec.get(name), default) for name, default in DEFAULTS.items()]
+    return None if any(v is None for v in values) else Hapke(*values)
 
 
 def _he(spec):

@@ -30,10 +30,16 @@ grazes (likewise away from the hot spot at any θi), and every f_geo > 0 makes t
 near the horizon; at the hot spot K_geo = sec²θ' − secθ' → +∞ instead.
 :meth:`RTLS.brf` returns the model's value; :meth:`RTLS.brdf` max(BRF, 0)/π, as the ``rtls``
 plugin evaluates it.
+
+The albedos MODIS reports from the kernels' integrals (:func:`black_sky_polynomial`,
+:func:`white_sky_polynomial`, and their float64 quadratures :func:`kernel_black_sky`,
+:func:`kernel_white_sky`) and its linear inversion of the weights (:func:`invert`) follow the
+class.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -139,3 +145,100 @@ class RTLS:
         k = int(np.argmin(low))
         where = tuple(float(np.degrees(a)) for a in (np.arccos(mi_[k]), np.arccos(mo[k]), ph[k]))
         return float(weight[low < 0].sum() / weight.sum()), float(low[k]), where
+
+    def modis_shape(self) -> bool:
+        """Whether the crowns are MODIS's (h/b = 2, b/r = 1), those of Lucht et al.'s
+        published integrals."""
+        return math.isclose(self.h / self.b, H / B) and math.isclose(self.b / self.r, B / R)
+
+    def white_sky(self) -> np.ndarray:
+        """The model's white-sky albedo, unclamped, per channel: the published integrals
+        (:func:`white_sky_polynomial`) for MODIS's crowns, else the kernels' quadrature
+        (:func:`kernel_white_sky`)."""
+        if self.modis_shape():
+            return white_sky_polynomial(self.f_iso, self.f_vol, self.f_geo)
+        vol, geo = kernel_white_sky(self.h, self.r, self.b, 32, 128, 128)
+        return self.f_iso + self.f_vol * vol + self.f_geo * geo
+
+
+# -- albedos and the linear inversion (MODIS's) ----------------------------------------------
+
+def black_sky_polynomial(theta, f_iso, f_vol, f_geo) -> np.ndarray:
+    """
+    The black-sky albedo (the directional-hemispherical reflectance at solar zenith θ, in
+    radians) of the model, unclamped, by Lucht et al.'s (2000, eqs. 49-52, Table 1) fit of each
+    kernel's integral ∫ K cosθo dωo/π, g0 + g1 θ² + g2 θ³, for h/b = 2, b/r = 1 only:
+    f_iso + f_vol (g0 + g1 θ² + g2 θ³)_vol + f_geo (...)_geo. Shape: θ's broadcast with
+    the weights'.
+    """
+    t = np.asarray(theta, dtype=np.float64)
+
+    def g(k):
+        g0, g1, g2 = BLACK_SKY[k]
+        return g0 + g1 * t ** 2 + g2 * t ** 3
+    return np.asarray(f_iso) + np.asarray(f_vol) * g("vol") + np.asarray(f_geo) * g("geo")
+
+
+def white_sky_polynomial(f_iso, f_vol, f_geo) -> np.ndarray:
+    """The white-sky albedo (bihemispherical reflectance under isotropic illumination) of the
+    model, unclamped: f_iso + 0.189184 f_vol − 1.377622 f_geo (Lucht et al. 2000, eqs.
+    49-52, Table 1; h/b = 2, b/r = 1 only)."""
+    return np.asarray(f_iso) + WHITE_SKY["vol"] * np.asarray(f_vol) + \
+        WHITE_SKY["geo"] * np.asarray(f_geo)
+
+
+def kernel_black_sky(theta: float, h=H, r=R, b=B, n_mu: int = 512,
+                     n_phi: int = 512) -> tuple[float, float]:
+    """(∫ K_vol cosθo dωo/π, ∫ K_geo cosθo dωo/π) at solar zenith θ (radians) by float64
+    quadrature (Gauss-Legendre in cosθo, the midpoint rule in φ): the exact counterpart of
+    :func:`black_sky_polynomial`'s fits, for any crowns."""
+    model = RTLS(h=h, r=r, b=b)
+    both = hemisphere_albedo(lambda wi, wo: np.stack(model.kernels(wi, wo), axis=1) / math.pi,
+                             theta, n_mu, n_phi)
+    return float(both[0]), float(both[1])
+
+
+def kernel_white_sky(h=H, r=R, b=B, n_theta: int = 64, n_mu: int = 256,
+                     n_phi: int = 256) -> tuple[float, float]:
+    """(∫ K_vol, ∫ K_geo) cosθi cosθo dωi dωo/π²: 2 ∫ of :func:`kernel_black_sky` cosθ sinθ dθ,
+    Gauss-Legendre in cos²θ (which makes the weight cosθ sinθ dθ uniform)."""
+    x, w = gauss_legendre(n_theta)
+    s, w_s = 0.5 * (x + 1.0), 0.5 * w  # s = cos²θ on (0, 1): 2 cosθ sinθ dθ = ds
+    rows = np.array([kernel_black_sky(math.acos(math.sqrt(si)), h, r, b, n_mu, n_phi)
+                     for si in s])
+    return float(w_s @ rows[:, 0]), float(w_s @ rows[:, 1])
+
+
+def invert(wi, wo, brf, weights=None, bounds=(0.0, 1.0), h=H, r=R, b=B) -> np.ndarray:
+    """
+    The kernel weights (f_iso, f_vol, f_geo) that minimise Σ w (BRF_model − BRF)² over the
+    direction pairs (wi, wo) (n, 3), ``brf`` (n,) the observed BRF, ``weights`` w (n,)
+    (default 1), ``h``, ``r``, ``b`` the crowns': the linear inversion of the MODIS algorithm
+    (Lucht et al. 2000: the model is linear in the weights), with each weight kept within
+    ``bounds`` (the plugin's [0, 1]; None: unbounded). A least-squares
+    problem with box bounds is convex, and its minimum is the unconstrained minimum on one
+    face of the box (KKT: the free weights' gradient is 0 there): every face, 3³ of them, is
+    solved and the best minimum inside the box kept.
+    """
+    k_vol, k_geo = RTLS(h=h, r=r, b=b).kernels(wi, wo)
+    a = np.stack([np.ones_like(k_vol), k_vol, k_geo], axis=1)
+    y = np.asarray(brf, dtype=np.float64).ravel()
+    w = np.ones_like(y) if weights is None else np.asarray(weights, dtype=np.float64)
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(y)) and len(y) >= 3):
+        raise ValueError("invert: needs 3 or more pairs above the surface with finite BRFs")
+    sw = np.sqrt(w)[:, None]
+    if bounds is None:
+        return np.linalg.lstsq(a * sw, y * sw[:, 0], rcond=None)[0]
+    best, best_cost = None, np.inf
+    for face in itertools.product((None, *bounds), repeat=3):  # None: free
+        fixed = np.array([0.0 if v is None else v for v in face])
+        free = [k for k, v in enumerate(face) if v is None]
+        x = fixed.copy()
+        if free:
+            rest = y - a @ fixed
+            x[free] = np.linalg.lstsq(a[:, free] * sw, rest * sw[:, 0], rcond=None)[0]
+        if np.all(x >= bounds[0] - 1e-12) and np.all(x <= bounds[1] + 1e-12):
+            cost = float(w @ (a @ x - y) ** 2)
+            if cost < best_cost:
+                best, best_cost = np.clip(x, *bounds), cost
+    return best

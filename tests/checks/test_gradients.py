@@ -47,11 +47,13 @@ PLUGINS = [spec_of(name) for name in registry.PLUGINS] + [
 ]
 
 
-#: The pdfs detached by design, per plugin: he's and rtls's sampling densities are tabulated
-#: from their parameters when they are set (a table has no derivative), and he's sampling
-#: probabilities are detached from them alike.
+#: The pdfs detached by design, per plugin: he's, rtls's, rpv's and hapke's sampling densities
+#: are tabulated from their parameters when they are set (a table has no derivative), and he's
+#: sampling probabilities are detached from them alike.
 DETACHED_PDF = {"he": {"sigma0", "tau", "eta.value", "k.value"},
-                "rtls": {"f_iso.value", "f_vol.value", "f_geo.value"}}
+                "rtls": {"f_iso.value", "f_vol.value", "f_geo.value"},
+                "rpv": {"rho_0.value", "k.value", "g.value"},
+                "hapke": {f"{k}.value" for k in ("w", "b", "c", "theta", "B_0", "h")}}
 
 
 @pytest.mark.parametrize("spec", PLUGINS, ids=lambda s: "-".join(str(v) for v in s.values()))

@@ -54,7 +54,7 @@ REFUSED = [
     (["furnace", "diffuse", "--force"], "furnace: --force goes with --render"),
     # plot: each kind its options
     (["plot", "slice", "diffuse", "--thetas", "30"],
-     "plot: --thetas goes with plot lobe or plot albedo; this is plot slice"),
+     "plot: --thetas goes with plot lobe or plot albedo or plot pp; this is plot slice"),
     (["plot", "lobe", "diffuse", "-n", "64"],
      "plot: -n/--samples goes with plot albedo; this is plot lobe"),
     (["plot", "slice", "diffuse", "-n", "64"], "plot: -n/--samples goes with plot albedo"),

@@ -48,6 +48,17 @@ BOUNDS = {
            {"sigma0": 1e3, "tau": 1e-3}, {"sigma0": 0.05, "tau": 1e4, "material": "Au"}],
     "rtls": [{"f_iso": f, "f_vol": f, "f_geo": f, "h": h, "r": r, "b": b}
              for f in (0.0, 1.0) for h, r, b in ((1e-3, 1e3, 1e-3), (1e3, 1e-3, 1e3))],
+    "rpv": [{"rho_0": 0.0, "k": 0.0, "g": -0.999, "rho_c": 0.0},
+            {"rho_0": 1.0, "k": 0.0, "g": 0.999, "rho_c": 2.0},
+            {"rho_0": 1.0, "k": 3.0, "g": -0.999, "rho_c": 2.0}],
+    "hapke": [{"w": 0.0, "b": 0.0, "c": 0.0, "theta": 0.0, "B_0": 0.0, "h": 0.0},
+              {"w": 1.0, "b": 1.0, "c": 1.0, "theta": 90.0, "B_0": 1.0, "h": 1.0},
+              {"w": 1.0, "b": 0.0, "c": 1.0, "theta": 0.0, "B_0": 1.0, "h": 0.0},
+              {"w": 1.0, "b": 1.0, "c": 0.0, "theta": 90.0, "B_0": 0.0, "h": 1.0}],
+    "ocean": [{"wind_speed": 0.0, "eta": 1e-6, "k": 0.0, "ext_ior": 1e6},
+              {"wind_speed": 0.0, "wind_direction": 0.0, "eta": 1e6, "k": 1e6, "ext_ior": 1e-6},
+              {"wind_speed": 37.54, "whitecaps": 1.0, "wind_direction": 90.0},
+              {"wind_speed": 37.54, "whitecaps": True, "shadowing": False}],
 }
 
 

@@ -44,6 +44,9 @@ PLUGINS = {
     # plumbing, tests/plugins/test_he_plugin.py the series
     "he": ("diffuse_reflectance", {"specular_reflectance": 0.8, "sigma0": 0.05, "terms": 16}),
     "rtls": ("f_iso", {"f_geo": 0.02}),
+    "rpv": ("rho_0", {"k": 0.6, "g": -0.2}),
+    "hapke": ("w", {"B_0": 1.0, "h": 0.06}),
+    "ocean": ("whitecaps", {"wind_speed": 10.0, "wind_direction": 30.0}),
 }
 
 

@@ -43,9 +43,37 @@ RTLS = {
     "crowns": {"f_iso": 0.2, "f_vol": 0.1, "f_geo": 0.03, "h": 3.0, "r": 1.0, "b": 2.0},
     "volume": {"f_iso": 0.01, "f_vol": 0.2, "f_geo": 0.0},
 }
+#: rpv's defaults (k = 0.1: the bowl, ρc = ρ0); its docstring's example (Eradiate's); a bowl
+#: (k < 1) scattering forward with ρc apart from ρ0; a bell (k > 1) scattering backward.
+RPV = {
+    "defaults": {},
+    "example": {"rho_0": 0.02, "k": 0.3, "g": -0.12},
+    "bowl": {"rho_0": 0.1, "k": 0.6, "g": 0.2, "rho_c": 0.3},
+    "bell": {"rho_0": 0.2, "k": 1.4, "g": -0.3, "rho_c": 0.05},
+}
 #: Each plugin of mi_brdfs: Eradiate's plugin of the same model and the parameter sets.
+#: ocean_mishchenko's defaults; its docstring's example; a calm sea (U = 0: Cox & Munk's
+#: σ² = 0.003, the narrowest glint); a storm of an absorbing index under another exterior.
+OCEAN = {
+    "defaults": {},
+    "example": {"wind_speed": 10.0, "eta": 1.33, "k": 0.0, "ext_ior": 1.0},
+    "calm": {"wind_speed": 0.0, "eta": 1.34},
+    "storm": {"wind_speed": 30.0, "eta": 1.5, "k": 0.3, "ext_ior": 1.2},
+}
+#: hapke's defaults (B_0 = h = 0: Eradiate's NaN at g = 0); its docstring's example, a
+#: lunar-like regolith; a smooth surface (θ̄ = 0) of forward-scattering grains; a bright one
+#: (w = 0.99) with a broad opposition surge, whose directional albedo exceeds 1.
+HAPKE = {
+    "defaults": {},
+    "example": {"w": 0.3, "b": 0.25, "c": 0.7, "theta": 20.0, "B_0": 1.0, "h": 0.06},
+    "smooth": {"w": 0.6, "b": 0.4, "c": 0.3, "theta": 0.0, "B_0": 0.5, "h": 0.2},
+    "bright": {"w": 0.99, "b": 0.3, "c": 0.9, "theta": 10.0, "B_0": 1.0, "h": 1.0},
+}
 PLUGINS = {
     "rtls": ("rtls", RTLS),
+    "ocean": ("ocean_mishchenko", OCEAN),
+    "rpv": ("rpv", RPV),
+    "hapke": ("hapke", HAPKE),
 }
 THETA_I = (0, 10, 30, 45, 60, 75, 85, 87, 88, 89)
 THETA_O = (0, 10, 30, 45, 60, 75, 85, 86, 87, 88, 89)
@@ -64,8 +92,10 @@ def direction(theta_deg: float, phi_deg: float) -> list[float]:
     return [struct.unpack("f", struct.pack("f", x))[0] for x in w]
 
 
-def pairs() -> tuple[list, list, list]:
-    """(wi, wo, kind) of every pair: "grid", "backscatter" (ωo = ωi) and "random"."""
+def pairs(specular: bool = False) -> tuple[list, list, list]:
+    """(wi, wo, kind) of every pair: "grid", "backscatter" (ωo = ωi) and "random"; with
+    ``specular`` also "specular" (ωo the mirror image of ωi: a glint's peak) at the
+    backscatter's θ and azimuths."""
     wi, wo, kind = [], [], []
     for ti in THETA_I:
         for to in THETA_O:
@@ -85,6 +115,11 @@ def pairs() -> tuple[list, list, list]:
         wi.append(direction(ti, pi_))
         wo.append(direction(to, po))
         kind.append("random")
+    for theta in BACKSCATTER if specular else ():
+        for azimuth in AZIMUTHS:
+            wi.append(direction(theta, azimuth))
+            wo.append([-wi[-1][0], -wi[-1][1], wi[-1][2]])
+            kind.append("specular")
     return wi, wo, kind
 
 
@@ -120,7 +155,7 @@ def table(name: str) -> dict:
     from importlib.metadata import version
 
     plugin, sets = PLUGINS[name]
-    wi, wo, kind = pairs()
+    wi, wo, kind = pairs(specular=name == "ocean")
     columns = {f"{set_name} {v}": evaluate(plugin, v, params, wi, wo)
                for set_name, params in sets.items() for v in VARIANTS}
     return {

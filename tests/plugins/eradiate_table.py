@@ -1,0 +1,63 @@
+"""
+What the comparisons of the Earth-observation plugins with Eradiate's share: the committed
+tables validation/eradiate/<plugin>.json (``make eradiate-values``: Eradiate's plugins of
+``eradiate-mitsuba``, evaluated in a virtual environment of their own, at fixed pairs and
+parameter sets, in float32 and float64), the plugin's eval at the same pairs, and the rules:
+where Eradiate's value is finite and non-negative the plugin's equals it within a tolerance
+per pair; where it is negative (by more than the tolerance) the plugin's is 0 (a clamp);
+where it is not finite the plugin's is finite. Each kind is counted.
+"""
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from mi_brdfs.checks.batch import interaction, vectors
+from mi_brdfs.errors import MiBrdfsWarning
+
+FOLDER = Path(__file__).resolve().parents[2] / "validation" / "eradiate"
+#: The unit roundoff of each of Eradiate's variants.
+UNIT = {"scalar_rgb": 2.0 ** -24, "scalar_mono_double": 2.0 ** -53}
+
+
+def load_table(plugin: str):
+    """(kind (n,), wi (n, 3), wo (n, 3), {set name: params}, {(set, variant): values (n,)})
+    of ``validation/eradiate/<plugin>.json``."""
+    data = json.loads((FOLDER / f"{plugin}.json").read_text())
+    rows = data["rows"]
+    kind = np.array([r[0] for r in rows])
+    wi, wo = (np.array([r[k] for r in rows], dtype=np.float64) for k in (1, 2))
+    columns = {tuple(c.split()): np.array([float(r[i]) for r in rows])
+               for i, c in enumerate(data["columns"]) if i >= 3}
+    return kind, wi, wo, data["sets"], columns
+
+
+def plugin_values(plugin: str, params: dict, wi, wo) -> np.ndarray:
+    """Our plugin's eval at every pair: one array call (channel 0; the parameters are
+    grey), its warnings at load silenced."""
+    import mitsuba as mi
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MiBrdfsWarning)
+        bsdf = mi.load_dict({"type": plugin, **params})
+    value = bsdf.eval(mi.BSDFContext(), interaction(wi, len(wi)), vectors(wo))
+    return np.array(value[0], dtype=np.float64)
+
+
+def compare(ours, theirs, tol, wi, wo, what) -> tuple[int, int, int]:
+    """The rules of the module's docstring with ``tol`` (n,) the tolerance per pair; returns
+    (agree, Eradiate negative, Eradiate not finite) counts. Raises AssertionError naming the
+    first pair that breaks a rule."""
+    finite = np.isfinite(theirs)
+    tol = np.where(finite, tol, 0.0)
+    bad = finite & ~(np.abs(ours - np.maximum(theirs, 0.0)) <= tol)
+    bad |= (theirs < -tol) & (ours != 0)
+    bad |= ~np.isfinite(ours)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise AssertionError(
+            f"{what}: {bad.sum()} pairs differ from Eradiate's, e.g. {ours[i]:.7g} against "
+            f"{theirs[i]:.7g} at wi = {wi[i]}, wo = {wo[i]} (tolerance {tol[i]:.3g})")
+    return int((finite & (theirs >= 0)).sum()), int((theirs < 0).sum()), int((~finite).sum())

@@ -1,0 +1,133 @@
+"""
+The ``ocean`` plugin against Eradiate's ``ocean_mishchenko``: the committed table
+validation/eradiate/ocean.json (``make eradiate-values``: ``eradiate-mitsuba`` 0.5.0 in a
+virtual environment of its own, at fixed pairs, the mirror direction included, and parameter
+sets, in float32 and float64). Eradiate computes Smith's Λ by Walter's rational approximation
+(Mitsuba's ``microfacet.h``, < 0.35 % in G1), the plugin exactly (the paper's erfc): the
+plugin's value times S_approx/S_exact, in float64 (:func:`approximation`), equals Eradiate's
+within float32 rounding (and, where a direction is within 4.5·10⁻⁴ rad of the normal, the
+4.9·10⁻⁴ rad by which Eradiate moves it: it clamps μ at 0.9999999). At exact backscatter
+ωo = ωi Eradiate's Fresnel matrix (Mishchenko & Travis's amplitude matrix over
+|ωi × ωo|⁴, a plane of scattering that is undefined there) is 0/0: its values are 0, tiny or
+off by factors; the plugin's equal the float64 reference there. Each kind is counted (the
+plugin's docstring quotes them); a plugin with α² = σ²/2 fails.
+"""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import CONDITIONING_FACTOR, reference_conditioning
+
+from mi_brdfs.checks.batch import interaction, vectors
+from mi_brdfs.reference import ocean as ref
+from mi_brdfs.scattering import ocean as terms
+
+TABLE = Path(__file__).resolve().parents[2] / "validation" / "eradiate" / "ocean.json"
+#: Two float32 evaluations (Eradiate's and the plugin's), each within a few 10⁻⁶.
+RTOL = 2e-5
+#: Where Eradiate moves a direction off the normal (μ > 0.9999999): the value's change by a
+#: 4.9·10⁻⁴ rad move, at most 5·10⁻⁴ relative on the table.
+NADIR_RTOL = 1e-3
+#: (agree, exact backscatter where Eradiate's Fresnel is 0/0) per set and Eradiate variant,
+#: of the table's 840 pairs: what the plugin's docstring quotes.
+COUNTS = {
+    ("defaults", "scalar_rgb"): (832, 8), ("defaults", "scalar_mono_double"): (831, 9),
+    ("example", "scalar_rgb"): (807, 33), ("example", "scalar_mono_double"): (807, 33),
+    ("calm", "scalar_rgb"): (833, 7), ("calm", "scalar_mono_double"): (832, 8),
+    ("storm", "scalar_rgb"): (789, 51), ("storm", "scalar_mono_double"): (790, 50),
+}
+
+
+def load_table():
+    """(kind (n,), wi (n, 3), wo (n, 3), {set: params}, {(set, variant): values (n,)})."""
+    data = json.loads(TABLE.read_text())
+    rows = data["rows"]
+    kind = np.array([r[0] for r in rows])
+    wi, wo = (np.array([r[k] for r in rows], dtype=np.float64) for k in (1, 2))
+    columns = {tuple(c.split()): np.array([float(r[i]) for r in rows])
+               for i, c in enumerate(data["columns"]) if i >= 3}
+    return kind, wi, wo, data["sets"], columns
+
+
+def plugin_values(params, wi, wo):
+    """The plugin's eval at every pair: one array call (channel 0)."""
+    import mitsuba as mi
+
+    bsdf = mi.load_dict({"type": "ocean", **params})
+    value = bsdf.eval(mi.BSDFContext(), interaction(wi, len(wi)), vectors(wo))
+    return np.array(value[0], dtype=np.float64)
+
+
+def _lambda_rational(w, alpha):
+    """Λ as Mitsuba's microfacet.h computes it for Beckmann: (1 − 1.259a + 0.396a²)/(3.535a
+    + 2.181a²), 0 for a ≥ 1.6, a = 1/(α tanθ)."""
+    tan = np.hypot(w[:, 0], w[:, 1]) / w[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = 1 / (alpha * tan)
+        out = (1 - 1.259 * a + 0.396 * a * a) / (3.535 * a + 2.181 * a * a)
+    return np.where(a >= 1.6, 0.0, out)
+
+
+def approximation(params, wi, wo):
+    """S_approx/S_exact = (1 + Λ(ωi) + Λ(ωo))/(1 + Λ~(ωi) + Λ~(ωo)) in float64."""
+    model = ref.Ocean(**params)
+    alpha = math.sqrt(terms.ISOTROPIC[0] + terms.ISOTROPIC[1] * params.get("wind_speed", 0.1))
+    return (1 + model.lam(wi) + model.lam(wo)) / \
+        (1 + _lambda_rational(wi, alpha) + _lambda_rational(wo, alpha))
+
+
+def compare(ours, theirs, params, kind, wi, wo, what):
+    """The rules of the module's docstring; (agree, backscatter 0/0) counts."""
+    model = ref.Ocean(**params)
+
+    def f(a, b):
+        return model.brdf(a, b)[:, 0] * b[:, 2]
+
+    cond = reference_conditioning(f, wi, wo)
+    nadir = (wi[:, 2] > 0.9999999) | (wo[:, 2] > 0.9999999)
+    expected = ours * approximation(params, wi, wo)
+    tol = (np.where(nadir, NADIR_RTOL, RTOL) + CONDITIONING_FACTOR * cond) * np.abs(theirs) + \
+        1e-6 * np.abs(theirs).max()
+    agree = np.abs(expected - theirs) <= tol
+    degenerate = (kind == "backscatter") & ~agree
+    reference = f(wi, wo)
+    paper = np.abs(ours - reference) <= (RTOL + CONDITIONING_FACTOR * cond) * reference + \
+        1e-6 * np.abs(reference).max()
+    bad = ~agree & ~(degenerate & paper)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise AssertionError(
+            f"{what}: {bad.sum()} pairs differ from Eradiate's, e.g. {expected[i]:.7g} against "
+            f"{theirs[i]:.7g} at wi = {wi[i]}, wo = {wo[i]} ({kind[i]}, tolerance "
+            f"{tol[i]:.3g})")
+    return int(agree.sum()), int(degenerate.sum())
+
+
+def test01_equal_to_eradiate(variant_llvm_ad_rgb):
+    """Per parameter set, against Eradiate's float32 and float64 values, with the counts of
+    :data:`COUNTS`; finite and non-negative everywhere."""
+    kind, wi, wo, sets, columns = load_table()
+    counts = {}
+    for name, params in sets.items():
+        ours = plugin_values(params, wi, wo)
+        assert np.all(ours >= 0) and np.all(np.isfinite(ours)), name
+        for (set_name, variant), theirs in columns.items():
+            if set_name == name:
+                counts[name, variant] = compare(ours, theirs, params, kind, wi, wo,
+                                                f"ocean {name} against Eradiate's {variant}")
+    assert counts == COUNTS
+
+
+def test02_a_wrong_roughness_fails(variant_llvm_ad_rgb, monkeypatch):
+    """A plugin with α² = σ²/2 (the variance of one axis) fails the comparison."""
+    right = terms.roughness
+    monkeypatch.setattr(terms, "roughness",
+                        lambda u, aniso: (right(u, aniso)[0] / math.sqrt(2), None))
+    kind, wi, wo, sets, columns = load_table()
+    params = sets["example"]
+    with pytest.raises(AssertionError, match="differ from Eradiate's"):
+        compare(plugin_values(params, wi, wo), columns["example", "scalar_rgb"], params, kind,
+                wi, wo, "ocean halved")
