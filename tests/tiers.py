@@ -514,6 +514,9 @@ SLOW = {
             "args1---swap expects ID=BSDF", "args2-no <bsdf id=\"nosuchid\">",
             "args3-the renders differ in size"]),
     },
+    "tests/test_earth.py": {
+        "test06_the_bundled_scene_renders": WHOLE,
+    },
     "tests/test_fit.py": {
         "test01_round_trip": (MORE, [
             "phong", "cooktorrance", "ward", "orennayar", "ashikhmin", "lafortune",

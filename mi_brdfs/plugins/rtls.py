@@ -165,6 +165,13 @@ class RTLS(mi.BSDF):
     (scalar_mono_double) at 76 pairs per set, exact backscatter all. The plugin is finite
     there, within 10⁻⁶ of the float64 model.
 
+    **The field's quantities.** ``mi-brdfs plot pp`` draws the BRF in the principal plane and
+    ``mi-brdfs furnace`` prints the black-sky and white-sky albedos; docs/earth-observation.md
+    measures them against Lucht et al.'s kernel integrals (the black-sky polynomials within
+    0.025 of the float64 quadrature up to θ = 75°) and shows ``mi-brdfs fit TARGET --model rtls
+    --metric ngan`` landing on MODIS's linear inversion of the kernels
+    (``mi_brdfs.reference.rtls.invert``).
+
     **Polarized variants.** The model describes no polarization: values are depolarizers.
 
     .. tabs::

@@ -5,7 +5,8 @@ tables validation/eradiate/<plugin>.json (``make eradiate-values``: Eradiate's p
 parameter sets, in float32 and float64), the plugin's eval at the same pairs, and the rules:
 where Eradiate's value is finite and non-negative the plugin's equals it within a tolerance
 per pair; where it is negative (by more than the tolerance) the plugin's is 0 (a clamp);
-where it is not finite the plugin's is finite. Each kind is counted.
+where it is not finite the plugin's is finite. Each kind is counted. A plugin's own rule may
+excuse pairs (``ocean``: exact backscatter, where Eradiate's value is 0/0).
 """
 
 import json
@@ -13,6 +14,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from helpers import CONDITIONING_FACTOR, reference_conditioning
 
 from mi_brdfs.checks.batch import interaction, vectors
 from mi_brdfs.errors import MiBrdfsWarning
@@ -46,18 +48,31 @@ def plugin_values(plugin: str, params: dict, wi, wo) -> np.ndarray:
     return np.array(value[0], dtype=np.float64)
 
 
-def compare(ours, theirs, tol, wi, wo, what) -> tuple[int, int, int]:
+def base_tolerance(rtol, f, wi, wo, theirs) -> np.ndarray:
+    """The tolerance per pair that every comparison starts from: ``rtol`` (a number or one per
+    pair) and the directions' conditioning of ``f(wi, wo)`` (the float64 model's f·cosθo, as
+    in helpers.assert_matches_reference) relative to Eradiate's value, plus 10⁻⁶ of its
+    largest finite value."""
+    cond = reference_conditioning(f, wi, wo)
+    return (rtol + CONDITIONING_FACTOR * cond) * np.abs(theirs) + \
+        1e-6 * np.abs(theirs[np.isfinite(theirs)]).max()
+
+
+def compare(ours, theirs, tol, wi, wo, what, excused=None) -> tuple[int, int, int]:
     """The rules of the module's docstring with ``tol`` (n,) the tolerance per pair; returns
-    (agree, Eradiate negative, Eradiate not finite) counts. Raises AssertionError naming the
+    (agree, Eradiate negative, Eradiate not finite) counts. ``excused`` (n,) bool: pairs where
+    the plugin's value may differ from Eradiate's (a rule of the plugin's own, checked by the
+    caller); those that differ are not counted as agreeing. Raises AssertionError naming the
     first pair that breaks a rule."""
     finite = np.isfinite(theirs)
     tol = np.where(finite, tol, 0.0)
-    bad = finite & ~(np.abs(ours - np.maximum(theirs, 0.0)) <= tol)
-    bad |= (theirs < -tol) & (ours != 0)
-    bad |= ~np.isfinite(ours)
+    differ = finite & ~(np.abs(ours - np.maximum(theirs, 0.0)) <= tol)
+    excused = differ & (False if excused is None else excused)
+    bad = (differ & ~excused) | ((theirs < -tol) & (ours != 0)) | ~np.isfinite(ours)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
         raise AssertionError(
             f"{what}: {bad.sum()} pairs differ from Eradiate's, e.g. {ours[i]:.7g} against "
             f"{theirs[i]:.7g} at wi = {wi[i]}, wo = {wo[i]} (tolerance {tol[i]:.3g})")
-    return int((finite & (theirs >= 0)).sum()), int((theirs < 0).sum()), int((~finite).sum())
+    return (int((finite & (theirs >= 0) & ~excused).sum()), int((theirs < 0).sum()),
+            int((~finite).sum()))

@@ -10,15 +10,16 @@ parameters through mi.traverse; one-line errors.
 """
 
 import math
-import warnings
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from helpers import assert_matches_reference, eval_pdf, random_directions, sample
+from earth_helpers import (
+    assert_load_error, assert_one_glossy_lobe, cos_reference, direction, hot_spot_pairs,
+    load_warnings, singular_pairs)
+from helpers import assert_matches_reference, eval_pdf, sample
 
-from mi_brdfs.errors import MiBrdfsWarning
 from mi_brdfs.reference import hapke as ref
 from mi_brdfs.reference.quadrature import gauss_legendre, sphere_grid
 from mi_brdfs.scattering import hapke as scattering
@@ -30,25 +31,6 @@ LUNAR = {"w": 0.3, "b": 0.25, "c": 0.7, "theta": 20.0, "B_0": 1.0, "h": 0.06}
 BRIGHT = {"w": 0.99, "b": 0.3, "c": 0.9, "theta": 0.0, "B_0": 1.0, "h": 1.0}
 #: float32 evaluation: within 10⁻⁵ of the float64 model beyond the directions' conditioning.
 RTOL = 1e-5
-
-
-def _direction(theta, phi=0.0):
-    theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
-    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)],
-                    -1)
-
-
-def _pairs(rng, n):
-    """Random pairs, a tenth exact backscatter (ωo = ωi), a tenth with ωo near grazing."""
-    wi, wo = random_directions(rng, n, lower=False), random_directions(rng, n, lower=False)
-    k = n // 10
-    wo[:k] = wi[:k]
-    wo[k:2 * k] = _direction(np.arccos(rng.uniform(1e-3, 1e-2, k)), rng.uniform(0, 6.3, k))
-    return wi, wo
-
-
-def _cos_reference(model):
-    return lambda wi, wo: model.brdf(wi, wo) * wo[:, 2:3]
 
 
 # -- the reference ---------------------------------------------------------------------------
@@ -84,7 +66,7 @@ def test03_opposition_and_phase_closed_forms():
     """At g = 0, smooth: f(B_0) − f(0) = w p(0) B_0/(8π cos i) (the surge multiplies the
     single scattering by 1 + B_0), for h = 0.06 and h = 0 (B(0) = B_0 at every h); B(g) =
     B_0/(1 + tan(g/2)/h) elsewhere; p's mean over the sphere is 1."""
-    w = _direction(np.radians([0.0, 30.0, 70.0]), 0.3)
+    w = direction(np.radians([0.0, 30.0, 70.0]), 0.3)
     b, c = 0.4, 0.7
     p0 = (1 - c) * (1 - b * b) / (1 + b) ** 3 + c * (1 - b * b) / (1 - b) ** 3
     for h in (0.06, 0.0):
@@ -110,7 +92,7 @@ def test04_roughness_limits_and_reciprocity(np_rng):
     for a, b in zip(at_zero, near):
         np.testing.assert_allclose(b, a, rtol=1e-6)
         np.testing.assert_allclose(b, b[0], rtol=1e-6)  # ψ does not matter there
-    wi, wo = _pairs(np_rng, 400)
+    wi, wo = hot_spot_pairs(np_rng, 400)
     smooth = ref.Hapke(**dict(LUNAR, theta=0.0)).brdf(wi, wo)
     np.testing.assert_allclose(ref.Hapke(**dict(LUNAR, theta=1e-6)).brdf(wi, wo), smooth,
                                rtol=1e-6)
@@ -124,13 +106,13 @@ def test05_eval_is_the_reference(variants_rgb, np_rng):
     """eval = f·cosθo per channel at random, backscatter and near-grazing pairs, for the
     defaults, a lunar regolith with RGB w and a rough bright one (θ̄ = 60°)."""
     n = 60 if variants_rgb.startswith("scalar") else 3000
-    wi, wo = _pairs(np_rng, n)
+    wi, wo = hot_spot_pairs(np_rng, n)
     rgb = {"type": "rgb", "value": [0.2, 0.3, 0.4]}
     for params, w in (({}, 0.5), (dict(LUNAR, w=rgb), [0.2, 0.3, 0.4]),
                       ({"w": 0.9, "theta": 60.0, "B_0": 0.5, "h": 0.3}, 0.9)):
         bsdf = mi.load_dict(dict(type="hapke", **params))
         model = ref.Hapke(**dict(params, w=w))
-        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(model), wi, wo,
+        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(model), wi, wo,
                                  RTOL, f"hapke {params}")
 
 
@@ -140,24 +122,17 @@ def test06_a_broken_h_function_is_rejected(variant_scalar_rgb, np_rng, monkeypat
         return (1 + 2 * x) / (1 + 2 * x * dr.sqrt(1 - w))
 
     monkeypatch.setattr(scattering, "h_function", h_1981)
-    wi, wo = _pairs(np_rng, 60)
+    wi, wo = hot_spot_pairs(np_rng, 60)
     bsdf = mi.load_dict(dict(type="hapke", **LUNAR))
     with pytest.raises(AssertionError, match="against the float64 reference"):
-        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(ref.Hapke(**LUNAR)),
+        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(ref.Hapke(**LUNAR)),
                                  wi, wo, RTOL, "hapke broken H")
 
 
 def _singular():
     """θi = θo = 0, exact backscatter up to the horizon, grazing views (cosθo = 10⁻⁷, 0),
     grazing incidence."""
-    theta = np.radians([0.0, 30.0, 89.0, 89.99999, 90.0])
-    w = _direction(theta, 0.4)
-    z = np.array([[0.0, 0.0, 1.0]])
-    graze = np.array([[1.0, 0.0, 1e-7], [-1.0, 0.0, 1e-7], [0.0, 1.0, 0.0]])
-    graze /= np.linalg.norm(graze, axis=1, keepdims=True)
-    wi = np.concatenate([w, np.repeat(z, 3, 0), np.repeat(graze[:1], 3, 0)])
-    wo = np.concatenate([w, graze, graze])
-    return wi, wo
+    return singular_pairs([0.0, 30.0, 89.0, 89.99999, 90.0], (1e-7, 1e-7))
 
 
 def test07_finite_and_non_negative_at_the_singular_places(variant_scalar_rgb):
@@ -181,26 +156,19 @@ def test07_finite_and_non_negative_at_the_singular_places(variant_scalar_rgb):
 
 # -- the energy warning ----------------------------------------------------------------------
 
-def _warnings(spec):
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        bsdf = mi.load_dict(spec)
-    return bsdf, [str(w.message) for w in caught if issubclass(w.category, MiBrdfsWarning)]
-
-
 def test08_energy_warning_at_load(variant_scalar_rgb):
     """A bright surface with a broad surge (albedo 1.15 at θi = 89°) warns in one line naming
     hapke, the parameters, the albedo and θi; the defaults, the lunar regolith and
     spatially varying parameters (cosine-sampled) do not."""
-    _, lines = _warnings({"type": "hapke", **BRIGHT})
+    _, lines = load_warnings({"type": "hapke", **BRIGHT})
     assert len(lines) == 1 and "\n" not in lines[0], lines
     assert lines[0].startswith("hapke: w = 0.99, b = 0.3, c = 0.9, theta = 0, B_0 = 1, h = 1: "
                                "the model's directional albedo reaches 1.1")
     assert "at θi = 89°" in lines[0]
     for spec in ({}, LUNAR):
-        bsdf, lines = _warnings({"type": "hapke", **spec})
+        bsdf, lines = load_warnings({"type": "hapke", **spec})
         assert lines == [] and type(bsdf.lobes.lobes[0]).__name__ == "Tabulated"
-    bsdf, lines = _warnings({"type": "hapke", **dict(BRIGHT, w={"type": "checkerboard"})})
+    bsdf, lines = load_warnings({"type": "hapke", **dict(BRIGHT, w={"type": "checkerboard"})})
     assert lines == [] and type(bsdf.lobes.lobes[0]).__name__ == "Cosine"
 
 
@@ -220,12 +188,12 @@ def test10_opposition_sampling(variant_llvm_ad_rgb, np_rng):
     less than the cosine's (the same mean)."""
     spec = dict(type="hapke", **LUNAR)
     for theta in (30.0, 75.0):
-        assert_sampling_matches_pdf(spec, wi=list(_direction(np.radians(theta))),
+        assert_sampling_matches_pdf(spec, wi=list(direction(np.radians(theta))),
                                     sample_count=200_000)
     varying = dict(spec, h={"type": "checkerboard", "color0": 0.06, "color1": 0.06})
-    assert_sampling_matches_pdf(varying, wi=list(_direction(np.radians(30.0))),
+    assert_sampling_matches_pdf(varying, wi=list(direction(np.radians(30.0))),
                                 sample_count=200_000)
-    wi = _direction(np.radians(75.0))
+    wi = direction(np.radians(75.0))
     bsdf, n = mi.load_dict(spec), 100_000
     ours = sample(bsdf, wi[None], np_rng.random(n), np_rng.random((n, 2)))["weight"].mean(1)
     wo = np.array(mi.warp.square_to_cosine_hemisphere(mi.Point2f(np_rng.random((2, n))))).T
@@ -240,12 +208,12 @@ def test11_parameters_through_traverse(variant_llvm_ad_rgb, np_rng):
     bsdf = mi.load_dict(dict(type="hapke", **LUNAR))
     params = mi.traverse(bsdf)
     assert {f"{k}.value" for k in ("w", "b", "c", "theta", "B_0", "h")} <= set(params.keys())
-    wi, wo = _pairs(np_rng, 500)
+    wi, wo = hot_spot_pairs(np_rng, 500)
     for value, acts in ((0.3, 0.3), (2.0, 1.0)):
         params["B_0.value"] = value
         params.update()
         model = ref.Hapke(**dict(LUNAR, B_0=acts))
-        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(model), wi, wo,
+        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(model), wi, wo,
                                  RTOL, f"hapke B_0 = {value}")
     assert bsdf.lobes.lobes[0].surface.constants[4] == pytest.approx(1.0)
     assert_consistent(bsdf, n=20_000)
@@ -259,19 +227,10 @@ def test11_parameters_through_traverse(variant_llvm_ad_rgb, np_rng):
     ({"B0": 0.1}, "did you mean B_0"),
 ])
 def test12_bad_parameters_are_one_line(variant_scalar_rgb, extra, message):
-    with pytest.raises(RuntimeError) as e:
-        mi.load_dict(dict(type="hapke", **extra))
-    assert message in str(e.value)
+    assert_load_error(dict(type="hapke", **extra), message)
 
 
 def test13_structure(variant_scalar_rgb):
     """One component, glossy reflection on the front side; the string names every
     parameter; 0 below the surface."""
-    bsdf = mi.load_dict(dict(type="hapke", **LUNAR))
-    assert bsdf.component_count() == 1
-    assert bsdf.flags(0) == int(mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide)
-    text = str(bsdf)
-    assert text.startswith("Hapke[") and all(f"{k} = " in text for k in LUNAR)
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(0.0, 0.0, -1.0)
-    assert float(dr.sum(bsdf.eval(mi.BSDFContext(), si, mi.Vector3f(0, 0, 1)))) == 0.0
+    assert_one_glossy_lobe(mi.load_dict(dict(type="hapke", **LUNAR)), "Hapke", LUNAR)

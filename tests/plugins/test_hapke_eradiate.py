@@ -11,8 +11,7 @@ swapped (c weighting the forward one) fails.
 
 import numpy as np
 import pytest
-from eradiate_table import UNIT, compare, load_table, plugin_values
-from helpers import CONDITIONING_FACTOR, reference_conditioning
+from eradiate_table import UNIT, base_tolerance, compare, load_table, plugin_values
 
 from mi_brdfs.reference import hapke as ref
 from mi_brdfs.scattering import hapke as scattering
@@ -62,9 +61,7 @@ def eradiate(params, wi, wo, unit):
 
 
 def tolerance(params, wi, wo, theirs, variant):
-    cond = reference_conditioning(model(params), wi, wo)
-    return (RTOL + CONDITIONING_FACTOR * cond) * np.abs(theirs) + \
-        1e-6 * np.abs(theirs[np.isfinite(theirs)]).max() + \
+    return base_tolerance(RTOL, model(params), wi, wo, theirs) + \
         2 * eradiate(params, wi, wo, UNIT[variant])
 
 

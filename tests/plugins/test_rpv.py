@@ -9,15 +9,16 @@ cosine at a hot spot; parameters through mi.traverse (ρc following ρ0); one-li
 """
 
 import math
-import warnings
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from helpers import assert_matches_reference, eval_pdf, random_directions, sample
+from earth_helpers import (
+    assert_load_error, assert_one_glossy_lobe, cos_reference, direction, hot_spot_pairs,
+    load_quietly, load_warnings, singular_pairs)
+from helpers import assert_matches_reference, eval_pdf, sample
 
-from mi_brdfs.errors import MiBrdfsWarning
 from mi_brdfs.reference import rpv as ref
 from mi_brdfs.reference.quadrature import hemisphere_albedo
 from mi_brdfs.scattering import rpv as scattering
@@ -30,32 +31,6 @@ HOTSPOT = {"rho_0": 0.2, "k": 1.4, "g": -0.3, "rho_c": 0.05}
 RTOL = 2e-6
 
 
-def _direction(theta, phi=0.0):
-    theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
-    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)],
-                    -1)
-
-
-def _pairs(rng, n):
-    """Random pairs, a tenth exact backscatter (ωo = ωi), a tenth with ωo near grazing
-    (cosθo in [10⁻³, 10⁻²])."""
-    wi, wo = random_directions(rng, n, lower=False), random_directions(rng, n, lower=False)
-    k = n // 10
-    wo[:k] = wi[:k]
-    wo[k:2 * k] = _direction(np.arccos(rng.uniform(1e-3, 1e-2, k)), rng.uniform(0, 6.3, k))
-    return wi, wo
-
-
-def _cos_reference(model):
-    return lambda wi, wo: model.brdf(wi, wo) * wo[:, 2:3]
-
-
-def _load(spec):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", MiBrdfsWarning)
-        return mi.load_dict(spec)
-
-
 # -- the reference ---------------------------------------------------------------------------
 
 def test01_reference_closed_forms():
@@ -64,7 +39,7 @@ def test01_reference_closed_forms():
     G = 2 tanθ) F = (1 − Θ²)/(1 + Θ² + 2Θ cos 2θ)^(3/2); k = 1, Θ = 0, ρc = 1 is Lambert's
     ρ0/π."""
     theta = np.radians([0.0, 20.0, 50.0, 80.0])
-    w = _direction(theta, 0.4)
+    w = direction(theta, 0.4)
     p = HOTSPOT
     model = ref.RPV(**p)
     c = np.cos(theta)
@@ -72,7 +47,7 @@ def test01_reference_closed_forms():
     expected = p["rho_0"] * (2 * c ** 3) ** (p["k"] - 1) * (1 - th) / (1 + th) ** 2 * \
         (2 - p["rho_c"])
     np.testing.assert_allclose(model.brf(w, w)[:, 0], expected, rtol=1e-12)
-    wo = _direction(theta, 0.4 + np.pi)
+    wo = direction(theta, 0.4 + np.pi)
     f = (1 - th ** 2) / (1 + th ** 2 + 2 * th * np.cos(2 * theta)) ** 1.5
     h = 1 + (1 - p["rho_c"]) / (1 + 2 * np.tan(theta))
     np.testing.assert_allclose(model.brf(w, wo)[:, 0],
@@ -83,7 +58,7 @@ def test01_reference_closed_forms():
 
 def test02_reference_is_reciprocal(np_rng):
     """f(ωi, ωo) = f(ωo, ωi): every factor is symmetric (Rahman et al. 1993 is reciprocal)."""
-    wi, wo = _pairs(np_rng, 400)
+    wi, wo = hot_spot_pairs(np_rng, 400)
     model = ref.RPV(**HOTSPOT)
     np.testing.assert_allclose(model.brf(wi, wo), model.brf(wo, wi), rtol=1e-12)
 
@@ -94,13 +69,13 @@ def test03_eval_is_the_reference(variants_rgb, np_rng):
     """eval = BRF/π·cosθo per channel at random, backscatter and near-grazing pairs, for the
     defaults (k = 0.1, ρc = ρ0) and the hot-spot bell with an RGB ρ0."""
     n = 60 if variants_rgb.startswith("scalar") else 3000
-    wi, wo = _pairs(np_rng, n)
+    wi, wo = hot_spot_pairs(np_rng, n)
     rgb = {"type": "rgb", "value": [0.1, 0.05, 0.02]}
     for params, model in (({}, ref.RPV()),
                           (dict(HOTSPOT, rho_0=rgb), ref.RPV(**dict(HOTSPOT,
                                                                     rho_0=[0.1, 0.05, 0.02])))):
-        bsdf = _load(dict(type="rpv", **params))
-        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(model), wi, wo,
+        bsdf = load_quietly(dict(type="rpv", **params))
+        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(model), wi, wo,
                                  RTOL, f"rpv {params}")
 
 
@@ -111,24 +86,17 @@ def test04_a_wrong_exponent_is_rejected(variant_llvm_ad_rgb, np_rng, monkeypatch
         return dr.exp(k * dr.log(ci * co * (ci + co)))
 
     monkeypatch.setattr(scattering, "minnaert", wrong)
-    wi, wo = _pairs(np_rng, 200)
+    wi, wo = hot_spot_pairs(np_rng, 200)
     bsdf = mi.load_dict(dict(type="rpv", **HOTSPOT))
     with pytest.raises(AssertionError, match="against the float64 reference"):
-        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(ref.RPV(**HOTSPOT)),
+        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(ref.RPV(**HOTSPOT)),
                                  wi, wo, RTOL, "rpv wrong exponent")
 
 
 def _singular():
     """θi = θo = 0, exact backscatter up to the horizon, grazing views (cosθo = 10⁻²⁵, 10⁻⁸,
     0), both grazing."""
-    theta = np.radians([0.0, 30.0, 89.0, 89.999, 89.99999, 90.0])
-    w = _direction(theta, 0.4)
-    z = np.array([[0.0, 0.0, 1.0]])
-    graze = np.array([[1.0, 0.0, 1e-25], [-1.0, 0.0, 1e-8], [0.0, 1.0, 0.0]])
-    graze /= np.linalg.norm(graze, axis=1, keepdims=True)
-    wi = np.concatenate([w, np.repeat(z, 3, 0), np.repeat(graze[:1], 3, 0)])
-    wo = np.concatenate([w, graze, graze])
-    return wi, wo
+    return singular_pairs([0.0, 30.0, 89.0, 89.999, 89.99999, 90.0], (1e-25, 1e-8))
 
 
 @pytest.mark.parametrize("params", [{"k": 0.0, "g": -0.999, "rho_0": 1.0, "rho_c": 0.0},
@@ -137,7 +105,7 @@ def test05_finite_and_non_negative_at_the_singular_places(variant_scalar_rgb, pa
     """eval, pdf and sample weights are finite and ≥ 0 in float32 where the model is +∞
     (k = 0 at the horizon, M ≤ 5·10¹⁷) with the sharpest F (|g| = 0.999) and H at its
     extremes (ρc = 0: 2 at the hot spot; ρc = 2: 0 there)."""
-    bsdf = _load(dict(type="rpv", **params))
+    bsdf = load_quietly(dict(type="rpv", **params))
     wi, wo = _singular()
     for x in eval_pdf(bsdf, wi, wo):
         assert np.isfinite(x).all() and (x >= 0).all(), x
@@ -149,19 +117,12 @@ def test05_finite_and_non_negative_at_the_singular_places(variant_scalar_rgb, pa
 
 # -- energy ----------------------------------------------------------------------------------
 
-def _warnings(spec):
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        bsdf = mi.load_dict(spec)
-    return bsdf, [str(w.message) for w in caught if issubclass(w.category, MiBrdfsWarning)]
-
-
 def test06_the_energy_warning(variant_scalar_rgb):
     """The defaults (k = 0.1) warn in one line with where E exceeds 1, E(89°) (21, as the
     issue's furnace of Eradiate's rpv found) and the horizon's; E(89°) and E just past the
     onset agree with the package's hemisphere quadrature; k = 1.5 does not warn; a k
     texture reaching below 1 warns without numbers."""
-    _, lines = _warnings({"type": "rpv"})
+    _, lines = load_warnings({"type": "rpv"})
     assert len(lines) == 1 and "\n" not in lines[0], lines
     assert lines[0].startswith("rpv: rho_0 = 0.1, k = 0.1, g = 0, rho_c = 0.1: the model's "
                                "directional albedo exceeds 1 (it creates energy) from θi = 74.6")
@@ -172,9 +133,9 @@ def test06_the_energy_warning(variant_scalar_rgb):
         pytest.approx(e89, rel=1e-3)
     assert hemisphere_albedo(model.brdf, math.radians(start - 0.05), 1024, 32)[0] < 1.0 < \
         hemisphere_albedo(model.brdf, math.radians(start + 0.05), 1024, 32)[0]
-    assert _warnings({"type": "rpv", "k": 1.5})[1] == []
+    assert load_warnings({"type": "rpv", "k": 1.5})[1] == []
     checker = {"type": "checkerboard", "color0": 0.5, "color1": 1.2}
-    bsdf, lines = _warnings({"type": "rpv", "k": checker})
+    bsdf, lines = load_warnings({"type": "rpv", "k": checker})
     assert lines == ["rpv: k reaches 0.5 < 1: the model's directional albedo grows without "
                      "bound towards grazing incidence (it creates energy there); values kept"]
     assert type(bsdf.lobes.lobes[0]).__name__ == "Cosine"
@@ -198,11 +159,11 @@ def test08_hot_spot_sampling(variant_llvm_ad_rgb, np_rng):
     (a parameter varying over the surface); the tabulated sampler's weights vary less than the
     cosine's (the same mean)."""
     spec = {"type": "rpv", "rho_0": 0.2, "k": 0.8, "g": -0.4, "rho_c": 0.0}
-    wi = _direction(np.radians(60.0))
+    wi = direction(np.radians(60.0))
     assert_sampling_matches_pdf(spec, wi=list(wi), sample_count=200_000)
     varying = dict(spec, k={"type": "checkerboard", "color0": 0.8, "color1": 0.8})
     assert_sampling_matches_pdf(varying, wi=list(wi), sample_count=200_000)
-    bsdf, n = _load(spec), 100_000
+    bsdf, n = load_quietly(spec), 100_000
     ours = sample(bsdf, wi[None], np_rng.random(n), np_rng.random((n, 2)))["weight"].mean(1)
     wo = np.array(mi.warp.square_to_cosine_hemisphere(mi.Point2f(np_rng.random((2, n))))).T
     plain = eval_pdf(bsdf, np.repeat(wi[None], n, 0), wo)[0].mean(1) / (wo[:, 2] / np.pi)
@@ -214,13 +175,13 @@ def test09_parameters_through_traverse(variant_llvm_ad_rgb, np_rng):
     """rho_0, k and g exposed, rho_c too where it is given (else it is ρ0's texture and
     follows it, as in Eradiate's); eval follows the reference at the new values; g beyond
     its range acts as 0.999."""
-    bsdf = _load({"type": "rpv"})
+    bsdf = load_quietly({"type": "rpv"})
     params = mi.traverse(bsdf)
     assert set(params.keys()) == {"rho_0.value", "k.value", "g.value"}
-    wi, wo = _pairs(np_rng, 500)
+    wi, wo = hot_spot_pairs(np_rng, 500)
     params["rho_0.value"], params["k.value"] = 0.4, 1.2
     params.update()
-    assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(ref.RPV(0.4, 1.2, 0.0)),
+    assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(ref.RPV(0.4, 1.2, 0.0)),
                              wi, wo, RTOL, "rpv rho_0 = 0.4 through traverse")
     bsdf = mi.load_dict(dict(type="rpv", **HOTSPOT))
     params = mi.traverse(bsdf)
@@ -229,7 +190,7 @@ def test09_parameters_through_traverse(variant_llvm_ad_rgb, np_rng):
     params.update()
     g = float(np.float32(0.999))  # as stored: F moves 10³ times g's rounding at g ≈ 1
     model = ref.RPV(**dict(HOTSPOT, rho_c=0.7, g=g))
-    assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(model), wi, wo,
+    assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(model), wi, wo,
                              RTOL, "rpv g = 1.5 through traverse")
     assert bsdf.lobes.lobes[0].surface.constants == pytest.approx((0.2, 1.4, 0.999, 0.7))
 
@@ -245,20 +206,10 @@ def test09_parameters_through_traverse(variant_llvm_ad_rgb, np_rng):
     ({"rho": 0.1}, "did you mean rho_c or rho_0?"),
 ])
 def test10_bad_parameters_are_one_line(variant_scalar_rgb, extra, message):
-    with pytest.raises(RuntimeError) as e:
-        mi.load_dict(dict(type="rpv", **extra))
-    assert message in str(e.value)
+    assert_load_error(dict(type="rpv", **extra), message)
 
 
 def test11_structure(variant_scalar_rgb):
     """One component, glossy reflection on the front side; the string names every
     parameter; 0 below the surface."""
-    bsdf = mi.load_dict(dict(type="rpv", **HOTSPOT))
-    assert bsdf.component_count() == 1
-    assert bsdf.flags(0) == int(mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide)
-    text = str(bsdf)
-    assert text.startswith("RPV[") and all(f"{k} = " in text for k in HOTSPOT)
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(0.0, 0.0, -1.0)
-    assert float(dr.sum(bsdf.eval(mi.BSDFContext(), si, mi.Vector3f(0, 0, 1)))) == 0.0
-    assert math.isfinite(float(bsdf.pdf(mi.BSDFContext(), si, mi.Vector3f(0, 0, 1))))
+    assert_one_glossy_lobe(mi.load_dict(dict(type="rpv", **HOTSPOT)), "RPV", HOTSPOT)

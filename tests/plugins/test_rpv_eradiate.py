@@ -10,8 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from eradiate_table import UNIT, compare, load_table, plugin_values
-from helpers import CONDITIONING_FACTOR, reference_conditioning
+from eradiate_table import UNIT, base_tolerance, compare, load_table, plugin_values
 
 from mi_brdfs.reference import rpv as ref
 from mi_brdfs.scattering import rpv as scattering
@@ -53,9 +52,7 @@ def cancellation(params, wi, wo, unit):
 
 
 def tolerance(params, wi, wo, theirs, variant):
-    cond = reference_conditioning(model(params), wi, wo)
-    return (RTOL + CONDITIONING_FACTOR * cond) * np.abs(theirs) + \
-        1e-6 * np.abs(theirs[np.isfinite(theirs)]).max() + \
+    return base_tolerance(RTOL, model(params), wi, wo, theirs) + \
         cancellation(params, wi, wo, UNIT[variant])
 
 

@@ -9,14 +9,15 @@ consistency, χ² and the tabulated sampler against the cosine at a hot spot; we
 through mi.traverse; one-line errors.
 """
 
-import math
 import warnings
 
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-from helpers import assert_matches_reference, eval_pdf, random_directions, sample
+from earth_helpers import (
+    assert_load_error, assert_one_glossy_lobe, cos_reference, direction, hot_spot_pairs,
+    load_warnings, singular_pairs)
+from helpers import assert_matches_reference, eval_pdf, sample
 
 from mi_brdfs.errors import MiBrdfsWarning
 from mi_brdfs.reference import rtls as ref
@@ -34,26 +35,6 @@ SHAPE = {"h": 3.0, "r": 1.0, "b": 2.0}
 RTOL = 1e-5
 
 
-def _direction(theta, phi=0.0):
-    theta, phi = np.broadcast_arrays(np.asarray(theta, float), np.asarray(phi, float))
-    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)],
-                    -1)
-
-
-def _pairs(rng, n):
-    """Random pairs, a tenth exact backscatter (ωo = ωi), a tenth with ωo near grazing
-    (cosθo in [10⁻³, 10⁻²])."""
-    wi, wo = random_directions(rng, n, lower=False), random_directions(rng, n, lower=False)
-    k = n // 10
-    wo[:k] = wi[:k]
-    wo[k:2 * k] = _direction(np.arccos(rng.uniform(1e-3, 1e-2, k)), rng.uniform(0, 6.3, k))
-    return wi, wo
-
-
-def _cos_reference(model):
-    return lambda wi, wo: model.brdf(wi, wo) * wo[:, 2:3]
-
-
 # -- the reference ---------------------------------------------------------------------------
 
 def test01_reference_closed_values():
@@ -65,18 +46,18 @@ def test01_reference_closed_values():
     z = np.array([[0.0, 0.0, 1.0]])
     np.testing.assert_allclose(model.kernels(z, z), [[0.0], [0.0]], atol=1e-15)
     theta = np.radians([10.0, 45.0, 70.0, 85.0])
-    w = _direction(theta, 0.7)
+    w = direction(theta, 0.7)
     sec = 1 / np.cos(theta)
     k_vol, k_geo = model.kernels(w, w)
     np.testing.assert_allclose(k_vol, np.pi / 4 * (sec - 1), rtol=1e-12)
     np.testing.assert_allclose(k_geo, sec ** 2 - sec, rtol=1e-7)  # t = acos(0 ± 1e-16)
-    wo = _direction(theta, 1.3)
+    wo = direction(theta, 1.3)
     cos_t = np.minimum(2 * np.tan(theta) / (1 + sec), 1.0)
     t = np.arccos(cos_t)
     overlap = (t - np.sin(t) * cos_t) * (1 + sec) / np.pi
     np.testing.assert_allclose(model.kernels(np.repeat(z, 4, 0), wo)[1],
                                overlap - 0.5 - 0.5 * sec, rtol=1e-12)
-    brf = model.brf(np.repeat(z, 2, 0), _direction(np.radians([89.0, 89.9])))[:, 0]
+    brf = model.brf(np.repeat(z, 2, 0), direction(np.radians([89.0, 89.9])))[:, 0]
     assert brf[0] > 0 > brf[1], brf
 
 
@@ -88,7 +69,7 @@ def test02_reference_phase_angle_is_spherical_trigonometry(np_rng):
     cos_xi = np.cos(ti) * np.cos(to) + np.sin(ti) * np.sin(to) * np.cos(pi_ - po)
     xi = np.arccos(np.clip(cos_xi, -1, 1))
     k_vol = ((np.pi / 2 - xi) * np.cos(xi) + np.sin(xi)) / (np.cos(ti) + np.cos(to)) - np.pi / 4
-    got = ref.RTLS().kernels(_direction(ti, pi_), _direction(to, po))[0]
+    got = ref.RTLS().kernels(direction(ti, pi_), direction(to, po))[0]
     np.testing.assert_allclose(got, k_vol, rtol=1e-9, atol=1e-12)
 
 
@@ -100,7 +81,7 @@ def white_sky(model, n=48, n_phi=96):
     phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
     a, b, c = (g.ravel() for g in np.meshgrid(mu, mu, phi, indexing="ij"))
     weight = np.einsum("i,j,k->ijk", w_mu * mu, w_mu * mu, np.full(n_phi, 4.0 / n_phi)).ravel()
-    k_vol, k_geo = model.kernels(_direction(np.arccos(a)), _direction(np.arccos(b), c))
+    k_vol, k_geo = model.kernels(direction(np.arccos(a)), direction(np.arccos(b), c))
     return weight @ k_vol, weight @ k_geo
 
 
@@ -119,7 +100,7 @@ def test04_eval_is_the_reference(variants_rgb, np_rng):
     for the defaults (negative near the horizon: the clamp included) and a hot-spot surface
     of other crowns with RGB weights."""
     n = 60 if variants_rgb.startswith("scalar") else 3000
-    wi, wo = _pairs(np_rng, n)
+    wi, wo = hot_spot_pairs(np_rng, n)
     rgb = {"type": "rgb", "value": [0.1, 0.05, 0.02]}
     for params in ({}, dict(HOTSPOT, f_iso=rgb, **SHAPE)):
         with warnings.catch_warnings():
@@ -127,7 +108,7 @@ def test04_eval_is_the_reference(variants_rgb, np_rng):
             bsdf = mi.load_dict(dict(type="rtls", **params))
         f_iso = [0.1, 0.05, 0.02] if params else ref.RTLS().f_iso
         model = ref.RTLS(**dict(params, f_iso=f_iso)) if params else ref.RTLS()
-        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(model), wi, wo,
+        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(model), wi, wo,
                                  RTOL, f"rtls {params}")
 
 
@@ -139,24 +120,17 @@ def test05_a_swapped_kernel_is_rejected(variant_llvm_ad_rgb, np_rng, monkeypatch
             f_vol * kernels.li_sparse_r(wi, wo, h_over_b, b_over_r)
 
     monkeypatch.setattr(kernels, "brf", swapped)
-    wi, wo = _pairs(np_rng, 200)
+    wi, wo = hot_spot_pairs(np_rng, 200)
     bsdf = mi.load_dict(dict(type="rtls", **HOTSPOT))
     with pytest.raises(AssertionError, match="against the float64 reference"):
-        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(ref.RTLS(**HOTSPOT)),
+        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(ref.RTLS(**HOTSPOT)),
                                  wi, wo, RTOL, "rtls swapped")
 
 
 #: Pairs at the model's singular places: θi = θo = 0, exact backscatter up to the horizon,
 #: grazing views (cosθo = 10⁻²⁵, whose sec² overflows float32, 10⁻⁸ and 0), both grazing.
 def _singular():
-    theta = np.radians([0.0, 30.0, 89.0, 89.999, 89.99999, 90.0])
-    w = _direction(theta, 0.4)
-    z = np.array([[0.0, 0.0, 1.0]])
-    graze = np.array([[1.0, 0.0, 1e-25], [-1.0, 0.0, 1e-8], [0.0, 1.0, 0.0]])
-    graze /= np.linalg.norm(graze, axis=1, keepdims=True)
-    wi = np.concatenate([w, np.repeat(z, 3, 0), np.repeat(graze[:1], 3, 0)])
-    wo = np.concatenate([w, graze, graze])
-    return wi, wo
+    return singular_pairs([0.0, 30.0, 89.0, 89.999, 89.99999, 90.0], (1e-25, 1e-8))
 
 
 def test06_finite_and_non_negative_at_the_singular_places(variants_rgb):
@@ -178,29 +152,22 @@ def test06_finite_and_non_negative_at_the_singular_places(variants_rgb):
 
 # -- the clamp's warning ---------------------------------------------------------------------
 
-def _warnings(spec):
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        bsdf = mi.load_dict(spec)
-    return bsdf, [str(w.message) for w in caught if issubclass(w.category, MiBrdfsWarning)]
-
-
 def test07_the_clamp_warns_at_load(variant_scalar_rgb):
     """The defaults (f_geo > 0: −∞ at the horizon) and f_vol > 7.2 f_iso (K_vol ≥ −0.139)
     warn in one line naming rtls, the weights, the share and the place; a set that stays ≥ 0
     (f_geo = 0, f_vol ≤ 7.2 f_iso) and spatially varying weights (cosine-sampled) do not."""
-    _, lines = _warnings({"type": "rtls"})
+    _, lines = load_warnings({"type": "rtls"})
     assert len(lines) == 1 and "\n" not in lines[0], lines
     assert lines[0].startswith("rtls: f_iso = 0.209741, f_vol = 0.081384, f_geo = 0.00414: "
                                "the kernel model's BRF goes below 0 on ")
     assert "max(BRF, 0)/π" in lines[0]
     share, low, _ = ref.RTLS().negative_share(32, 16)
     assert 0 < share < 1e-3 and low < 0
-    assert len(_warnings({"type": "rtls", "f_iso": 0.02, "f_vol": 0.2, "f_geo": 0.0})[1]) == 1
-    bsdf, lines = _warnings({"type": "rtls", "f_iso": 0.2, "f_vol": 0.1, "f_geo": 0.0})
+    assert len(load_warnings({"type": "rtls", "f_iso": 0.02, "f_vol": 0.2, "f_geo": 0.0})[1]) == 1
+    bsdf, lines = load_warnings({"type": "rtls", "f_iso": 0.2, "f_vol": 0.1, "f_geo": 0.0})
     assert lines == [] and type(bsdf.lobes.lobes[0]).__name__ == "Tabulated"
     checker = {"type": "checkerboard", "color0": 0.0, "color1": 0.3}
-    bsdf, lines = _warnings({"type": "rtls", "f_geo": checker})
+    bsdf, lines = load_warnings({"type": "rtls", "f_geo": checker})
     assert lines == [] and type(bsdf.lobes.lobes[0]).__name__ == "Cosine"
 
 
@@ -228,7 +195,7 @@ def test09_hot_spot_sampling(variant_llvm_ad_rgb, np_rng):
     the clamp makes f 0 fails, and the pdf is 0 there (a pdf > 0 there is rejected); the
     tabulated sampler's weights vary less than the cosine's (the same mean)."""
     spec = dict(type="rtls", **HOTSPOT)
-    wi = _direction(np.radians(60.0))
+    wi = direction(np.radians(60.0))
     assert_sampling_matches_pdf(spec, wi=list(wi), sample_count=200_000)
     varying = dict(spec, f_vol={"type": "checkerboard", "color0": 0.1, "color1": 0.1})
     assert_sampling_matches_pdf(varying, wi=list(wi), sample_count=200_000)
@@ -246,12 +213,12 @@ def test10_weights_through_traverse(variant_llvm_ad_rgb, np_rng):
     bsdf = mi.load_dict(dict(type="rtls", **HOTSPOT))
     params = mi.traverse(bsdf)
     assert {"f_iso.value", "f_vol.value", "f_geo.value"} <= set(params.keys())
-    wi, wo = _pairs(np_rng, 500)
+    wi, wo = hot_spot_pairs(np_rng, 500)
     for value, acts in ((0.3, 0.3), (2.0, 1.0)):
         params["f_geo.value"] = value
         params.update()
         model = ref.RTLS(**dict(HOTSPOT, f_geo=acts))
-        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], _cos_reference(model), wi, wo,
+        assert_matches_reference(eval_pdf(bsdf, wi, wo)[0], cos_reference(model), wi, wo,
                                  RTOL, f"rtls f_geo = {value}")
     assert bsdf.lobes.lobes[0].surface.constants == pytest.approx((0.2, 0.1, 1.0))
     assert_consistent(bsdf, n=20_000)
@@ -267,21 +234,11 @@ def test10_weights_through_traverse(variant_llvm_ad_rgb, np_rng):
     ({"f_volume": 0.1}, "did you mean f_vol"),
 ])
 def test11_bad_parameters_are_one_line(variant_scalar_rgb, extra, message):
-    with pytest.raises(RuntimeError) as e:
-        mi.load_dict(dict(type="rtls", **extra))
-    assert message in str(e.value)
+    assert_load_error(dict(type="rtls", **extra), message)
 
 
 def test12_structure(variant_scalar_rgb):
     """One component, glossy reflection on the front side; the string names every
     parameter."""
-    bsdf = mi.load_dict(dict(type="rtls", **HOTSPOT))
-    assert bsdf.component_count() == 1
-    assert bsdf.flags(0) == int(mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide)
-    text = str(bsdf)
-    assert text.startswith("RTLS[") and all(f"{k} = " in text for k in
-                                            ("f_iso", "f_vol", "f_geo", "h", "r", "b"))
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    si.wi = mi.Vector3f(0.0, 0.0, -1.0)
-    assert float(dr.sum(bsdf.eval(mi.BSDFContext(), si, mi.Vector3f(0, 0, 1)))) == 0.0
-    assert math.isfinite(float(bsdf.pdf(mi.BSDFContext(), si, mi.Vector3f(0, 0, 1))))
+    assert_one_glossy_lobe(mi.load_dict(dict(type="rtls", **HOTSPOT)), "RTLS",
+                           ("f_iso", "f_vol", "f_geo", "h", "r", "b"))

@@ -9,27 +9,19 @@ kind are counted (the plugin's docstring quotes them); a plugin with f_vol and f
 fails the comparison.
 """
 
-import json
 import math
-import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import CONDITIONING_FACTOR, reference_conditioning
+from eradiate_table import UNIT, base_tolerance, compare, load_table, plugin_values
 
-from mi_brdfs.checks.batch import interaction, vectors
-from mi_brdfs.errors import MiBrdfsWarning
 from mi_brdfs.reference import rtls as ref
 from mi_brdfs.scattering import rtls as kernels
 
-TABLE = Path(__file__).resolve().parents[2] / "validation" / "eradiate" / "rtls.json"
 #: Two float32 evaluations of the kernels (Eradiate's and the plugin's), each within 10⁻⁵ of
 #: the model away from the horizon (test_rtls.RTOL); the directions' rounding is the
 #: conditioning, as in helpers.assert_matches_reference.
 RTOL = 2e-5
-#: The unit roundoff of each of Eradiate's variants (:func:`cancellation`).
-UNIT = {"scalar_rgb": 2.0 ** -24, "scalar_mono_double": 2.0 ** -53}
 #: (agree, Eradiate negative, Eradiate not finite) per parameter set and Eradiate variant, of
 #: the table's 705 pairs: what the plugin's docstring quotes.
 COUNTS = {
@@ -38,27 +30,6 @@ COUNTS = {
     ("crowns", "scalar_rgb"): (510, 181, 14), ("crowns", "scalar_mono_double"): (448, 181, 76),
     ("volume", "scalar_rgb"): (663, 28, 14), ("volume", "scalar_mono_double"): (601, 28, 76),
 }
-
-
-def load_table():
-    """(wi (n, 3), wo (n, 3), {set name: params}, {(set, variant): values (n,)})."""
-    data = json.loads(TABLE.read_text())
-    rows = data["rows"]
-    wi, wo = (np.array([r[k] for r in rows], dtype=np.float64) for k in (1, 2))
-    columns = {tuple(c.split()): np.array([float(r[i]) for r in rows])
-               for i, c in enumerate(data["columns"]) if i >= 3}
-    return wi, wo, data["sets"], columns
-
-
-def plugin_values(params, wi, wo):
-    """The plugin's eval at every pair: one array call (channel 0; the weights are grey)."""
-    import mitsuba as mi
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", MiBrdfsWarning)  # the clamp's warning at load
-        bsdf = mi.load_dict({"type": "rtls", **params})
-    value = bsdf.eval(mi.BSDFContext(), interaction(wi, len(wi)), vectors(wo))
-    return np.array(value[0], dtype=np.float64)
 
 
 def model(params):
@@ -84,38 +55,26 @@ def cancellation(params, wi, wo, unit):
     return f_geo * (2 / np.pi) * (h / b) * (np.sqrt(d ** 2 + delta) - d) * wo[:, 2] / np.pi
 
 
-def compare(ours, theirs, params, wi, wo, variant, what):
-    """The rules of the module's docstring; (agree, negative, not finite) counts. Where
-    Eradiate's value is negative by less than the tolerance, the plugin's may be that close
+def tolerance(params, wi, wo, theirs, variant):
+    """Where Eradiate's value is negative by less than this, the plugin's may be that close
     to 0 (the two round differently)."""
-    finite = np.isfinite(theirs)
-    cond = reference_conditioning(model(params), wi, wo)
-    expected = np.maximum(theirs, 0.0)
-    tol = (RTOL + CONDITIONING_FACTOR * cond) * np.abs(theirs) + \
-        1e-6 * np.abs(theirs[finite]).max() + cancellation(params, wi, wo, UNIT[variant])
-    bad = finite & ~(np.abs(ours - expected) <= tol)
-    bad |= (theirs < -tol) & (ours != 0)
-    bad |= ~finite & ~np.isfinite(ours)
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise AssertionError(
-            f"{what}: {bad.sum()} pairs differ from Eradiate's, e.g. {ours[i]:.7g} against "
-            f"{theirs[i]:.7g} at wi = {wi[i]}, wo = {wo[i]} (tolerance {tol[i]:.3g})")
-    return int((finite & (theirs >= 0)).sum()), int((theirs < 0).sum()), int((~finite).sum())
+    return base_tolerance(RTOL, model(params), wi, wo, theirs) + \
+        cancellation(params, wi, wo, UNIT[variant])
 
 
 def test01_equal_to_eradiate(variant_llvm_ad_rgb):
     """Per parameter set, against Eradiate's float32 and float64 values, with the counts of
     :data:`COUNTS`."""
-    wi, wo, sets, columns = load_table()
+    _, wi, wo, sets, columns = load_table("rtls")
     counts = {}
     for name, params in sets.items():
-        ours = plugin_values(params, wi, wo)
+        ours = plugin_values("rtls", params, wi, wo)
         assert np.all(ours >= 0) and np.all(np.isfinite(ours)), name
         for (set_name, variant), theirs in columns.items():
             if set_name == name:
-                counts[name, variant] = compare(ours, theirs, params, wi, wo, variant,
-                                                f"rtls {name} against Eradiate's {variant}")
+                counts[name, variant] = compare(
+                    ours, theirs, tolerance(params, wi, wo, theirs, variant), wi, wo,
+                    f"rtls {name} against Eradiate's {variant}")
     assert counts == COUNTS
 
 
@@ -126,8 +85,9 @@ def test02_a_swapped_kernel_fails(variant_llvm_ad_rgb, monkeypatch):
             f_vol * kernels.li_sparse_r(wi, wo, h_over_b, b_over_r)
 
     monkeypatch.setattr(kernels, "brf", swapped)
-    wi, wo, sets, columns = load_table()
+    _, wi, wo, sets, columns = load_table("rtls")
     params = sets["example"]
+    theirs = columns["example", "scalar_rgb"]
     with pytest.raises(AssertionError, match="differ from Eradiate's"):
-        compare(plugin_values(params, wi, wo), columns["example", "scalar_rgb"], params, wi, wo,
-                "scalar_rgb", "rtls swapped")
+        compare(plugin_values("rtls", params, wi, wo), theirs,
+                tolerance(params, wi, wo, theirs, "scalar_rgb"), wi, wo, "rtls swapped")
