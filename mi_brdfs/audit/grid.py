@@ -266,6 +266,76 @@ def all_cases() -> list[Case]:
     return mitsuba_cases() + package_cases()
 
 
+#: The sea surface's parameters for the three ocean plugins of Eradiate's fork: a moderate wind
+#: (5 m/s) and the wavelength (nm) that ocean_legacy and ocean_grasp need.
+_OCEAN = {"wind_speed": 5.0}
+
+
+def eradiate_cases() -> list[Case]:
+    """The BSDF plugins Eradiate adds to its Mitsuba fork (``eradiate-mitsuba``,
+    https://github.com/eradiate/mitsuba3, src/eradiate_plugins/bsdfs): the defaults, and
+    the configurations where a model is known to leave its range (RTLS below zero, RPV with
+    k < 1 at grazing incidence, Hapke's opposition peak)."""
+    hapke = {"type": "hapke", "w": 0.5, "b": 0.3, "c": 0.5, "theta": 20.0, "B_0": 0.5,
+             "h": 0.2}
+    return [
+        case("rtls", "default (f_iso 0.21, f_vol 0.081, f_geo 0.0041)", {"type": "rtls"}),
+        case("rtls", "f_iso=0.1 f_vol=0.05 f_geo=0.05",
+             {"type": "rtls", "f_iso": 0.1, "f_vol": 0.05, "f_geo": 0.05}),
+        case("rpv", "default (rho_0=0.1 k=0.1 g=0)", {"type": "rpv"}),
+        case("rpv", "rho_0=0.2 k=0.8 g=-0.2 rho_c=0.3",
+             {"type": "rpv", "rho_0": 0.2, "k": 0.8, "g": -0.2, "rho_c": 0.3}),
+        case("rpv", "rho_0=0.2 k=1.2 g=0.1", {"type": "rpv", "rho_0": 0.2, "k": 1.2,
+                                             "g": 0.1}),
+        case("hapke", "default (w=0.5 b=0.2 c=0.5 θ=30° B_0=0 h=0)", {"type": "hapke"}),
+        case("hapke", "w=0.5 b=0.3 c=0.5 θ=20° B_0=0.5 h=0.2", hapke),
+        case("hapke", "w=0.99 B_0=1 h=0.05", dict(hapke, w=0.99, B_0=1.0, h=0.05)),
+        case("ocean_mishchenko", "default (wind 0.1 m/s)", {"type": "ocean_mishchenko"}),
+        case("ocean_mishchenko", "wind 5 m/s", dict({"type": "ocean_mishchenko"}, **_OCEAN)),
+        case("ocean_legacy", "λ=550 nm (default wind 0.1 m/s)",
+             {"type": "ocean_legacy", "wavelength": 550.0}),
+        case("ocean_legacy", "λ=550 nm wind 5 m/s",
+             dict({"type": "ocean_legacy", "wavelength": 550.0}, **_OCEAN)),
+        case("ocean_grasp", "λ=550 nm (default wind 0.1 m/s)",
+             {"type": "ocean_grasp", "wavelength": 550.0}),
+        case("ocean_grasp", "λ=550 nm wind 5 m/s",
+             dict({"type": "ocean_grasp", "wavelength": 550.0}, **_OCEAN)),
+        case("bilambertian", "default (0.5 / 0.5)", {"type": "bilambertian"}),
+        case("bilambertian", "reflectance=0.7 transmittance=0.2",
+             {"type": "bilambertian", "reflectance": 0.7, "transmittance": 0.2}),
+        case("maignan", "default (C=0.1 ndvi=0)", {"type": "maignan"}),
+        case("maignan", "C=5 ndvi=0.6", {"type": "maignan", "C": 5.0, "ndvi": 0.6}),
+        case("selectbsdf", "indices=1 of diffuse, roughconductor α=0.3",
+             {"type": "selectbsdf", "indices": 1.0, "a": {"type": "diffuse"},
+              "b": dict(RC, alpha=0.3)}),
+    ]
+
+
+#: Eradiate's BSDF plugins that the audit lists but cannot build standalone, and why.
+SKIPPED_ERADIATE = {
+    "mqdiffuse": "needs a gridded measured BRDF (its `filename`); none ships with the fork",
+    "measured_mono": "needs an RGL material file, like `measured`; none ships with the fork",
+}
+
+#: Per Mitsuba build (the distribution that installed ``mitsuba``,
+#: :func:`mi_brdfs.registry.mitsuba_build`): what the audit runs there. Under a fork the
+#: package's own plugins are left out (their audit is Mitsuba's; under the fork a plugin of
+#: the fork's may stand in the place of one of ours, :func:`mi_brdfs.registry.own_plugins`).
+BUILDS = {"eradiate-mitsuba": eradiate_cases}
+
+
+def cases_for(build: str) -> list[Case]:
+    """The configurations the audit runs under ``build``."""
+    if build in BUILDS:
+        return mitsuba_cases() + BUILDS[build]()
+    return all_cases()
+
+
+def skipped_for(build: str) -> dict:
+    """The plugins of ``build`` the audit cannot build standalone, and why."""
+    return dict(SKIPPED, **(SKIPPED_ERADIATE if build in BUILDS else {}))
+
+
 #: BSDF plugins of Mitsuba 3 that the audit lists but cannot build standalone, and why.
 SKIPPED = {
     "measured": "needs an RGL material file (https://rgl.epfl.ch/materials); none ships with "

@@ -29,20 +29,23 @@ def run_one(script: Path) -> int | None:
         return None
 
 
-def run_all(folder: Path = FOLDER, processes: int = 2) -> dict[str, int | None]:
+def run_all(folder: Path = FOLDER, processes: int = 2,
+            prefix: str = "validation/audit") -> dict[str, int | None]:
     """Exit status of every ``repro_*.py`` in ``folder`` by its path relative to the checkout
-    (``validation/audit/repro_x.py``, as the findings name them); {} without the folder."""
+    (``prefix/repro_x.py``, as the findings name them); {} without the folder."""
     scripts = sorted(Path(folder).glob("repro_*.py"))
     with ThreadPoolExecutor(max(1, processes)) as pool:
         codes = list(pool.map(run_one, scripts))
-    return {f"validation/audit/{s.name}": code for s, code in zip(scripts, codes)}
+    return {f"{prefix}/{s.name}": code for s, code in zip(scripts, codes)}
 
 
-def describe(code: int | None) -> str:
-    """What an exit status says about the defect in the installed Mitsuba."""
+def describe(code: int | None, fork: bool = False) -> str:
+    """What an exit status says about the defect in the installed Mitsuba (``fork``: a fork of
+    another version, where an exit 0 may also mean the defect was never there)."""
     if code == 1:
         return "exits 1 in this run: the defect is present"
     if code == 0:
-        return "exits 0 in this run: **fixed in this Mitsuba**"
+        return ("exits 0 in this run: **not in this build** (absent from its Mitsuba, or fixed)"
+                if fork else "exits 0 in this run: **fixed in this Mitsuba**")
     return ("**timed out**" if code is None else f"**exits {code}**") + \
         " in this run: the reproducer is broken"

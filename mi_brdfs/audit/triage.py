@@ -42,6 +42,9 @@ class Finding:
     #: where a fix landed upstream after the audited release (a pull request's URL and title,
     #: and what of the finding it fixes); None: not fixed in the newest upstream code searched
     fixed_upstream: str | None = None
+    #: the Mitsuba build whose plugin it is about (``"eradiate-mitsuba"``: a plugin of that
+    #: fork, which may share its name with one of ours); None: Mitsuba's code, in any build
+    build: str | None = None
 
     def covers(self, record: dict) -> bool:
         return ((self.bsdf == "*" or record["bsdf"] == self.bsdf)
@@ -50,10 +53,15 @@ class Finding:
                 and (self.when is None or bool(self.when(record))))
 
 
-def findings() -> list[Finding]:
-    """The triage of the audit's failures: :mod:`mi_brdfs.audit.findings`."""
+def findings(build: str | None = None) -> list[Finding]:
+    """The triage of the audit's failures under ``build`` (default: the installed Mitsuba's,
+    :func:`mi_brdfs.registry.mitsuba_build`): :mod:`mi_brdfs.audit.findings`, less those
+    about another build's plugins."""
     from .findings import all_findings
-    return all_findings()
+    if build is None:
+        from ..registry import mitsuba_build
+        build = mitsuba_build()[0]
+    return [f for f in all_findings() if f.build in (None, build)]
 
 
 def verdict(record: dict, table=None) -> tuple[str, Finding | None]:

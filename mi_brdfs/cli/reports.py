@@ -120,23 +120,27 @@ def cmd_audit(args) -> int:
 
     from ..audit import grid, report, run
     from ..errors import MiBrdfsError
-    from ..registry import use_variant
+    from ..registry import mitsuba_build, use_variant
 
     if not args.variant.startswith(("llvm_", "cuda_")):
         raise MiBrdfsError(f"--variant {args.variant}: the audit needs a JIT variant (χ² runs "
                            f"on mitsuba.chi2), e.g. llvm_ad_rgb")
-    out = report_folder(args, "MITSUBA_AUDIT-quick.md" if args.quick else "MITSUBA_AUDIT.md")
+    build = mitsuba_build()  # a fork of Mitsuba (Eradiate's) has its own report and cases
+    md, _ = report.paths(Path(args.out), args.quick, build)
+    out = report_folder(args, str(md.relative_to(args.out)))
+    _, js = report.paths(out, args.quick, build)
     use_variant(args.variant, fallback=False)  # fail here, in one line, if it is unusable
-    cases = grid.all_cases()
+    cases = grid.cases_for(build[0])
     if args.quick:
         cases = [c for c in cases if c.quick]
     if args.only is not None:
         names = set(_only_names(args.only))
-        unknown = names - {c.bsdf for c in grid.all_cases()}
+        known = {c.bsdf for c in grid.cases_for(build[0])}
+        unknown = names - known
         if unknown:
             raise MiBrdfsError(f"--only {args.only}: no audit configuration for "
                                f"{', '.join(sorted(unknown))} (the audit knows: "
-                               f"{', '.join(sorted({c.bsdf for c in grid.all_cases()}))})")
+                               f"{', '.join(sorted(known))})")
         cases = [c for c in cases if c.bsdf in names]
         if not cases:  # before anything is written: the report stays as it was
             raise MiBrdfsError(f"--only {args.only} --quick: none of these is in the quick "
@@ -144,18 +148,22 @@ def cmd_audit(args) -> int:
                                f"{', '.join(sorted({c.bsdf for c in grid.all_cases() if c.quick}))}"
                                f"); leave --quick out")
     t0 = time.perf_counter()
-    records = run.run(cases, args.variant, args.quick, out / "audit" / ".cache",
+    records = run.run(cases, args.variant, args.quick, js.parent / ".cache",
                       processes=args.processes or min(os.cpu_count() or 1, 4),
                       progress=not args.quiet)
     exits = None
     if not args.quick and not args.only:  # the whole audit reruns its evidence
         from ..audit import reproducers
         exits = reproducers.run_all(processes=args.processes or 2)
+        if build[0] != "mitsuba":  # and the fork's own
+            name = report.fork_name(build)
+            exits.update(reproducers.run_all(reproducers.FOLDER / name, args.processes or 2,
+                                             f"validation/audit/{name}"))
     command = "mi-brdfs audit" + (" --quick" if args.quick else "") + \
         (f" --only {args.only}" if args.only else "") + \
         (f" --variant {args.variant}" if args.variant != "llvm_ad_rgb" else "")
     md, js, counts = report.write(records, out, command, time.perf_counter() - t0,
-                                  args.variant, args.quick, exits=exits)
+                                  args.variant, args.quick, exits=exits, build=build)
     print(f"wrote {md} and {js}: " + ", ".join(f"{n} {v}" for v, n in sorted(counts.items())))
     broken = [p for p, code in (exits or {}).items() if code not in (0, 1)]
     for path in broken:
