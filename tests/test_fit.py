@@ -478,6 +478,47 @@ def test14_a_perfect_mirrors_index_is_fitted(variant_llvm_ad_rgb):
     assert result.spec["alpha"] == pytest.approx(0.1, rel=1e-2)
 
 
+def test17_earth_plugins_are_fitted_within_the_ranges_they_take(variant_llvm_ad_rgb):
+    """
+    Without a fit: every free parameter of rpv, hapke and ocean is fitted within a range the
+    plugin takes, so that both ends of it, as the fit writes them, load (fitted unbounded to
+    roughplastic, rpv wrote rho_0 = 1.00006 and hapke w = 1.88, which the plugins refuse; an
+    ocean's η clamped at (η − 1)/(η + 1) = −1 is η = 0); rpv's k is a Minnaert exponent
+    within [0, 3], not an extinction coefficient; hapke's w stops short of 1, where the
+    gradient of its H-function is NaN (every start of that fit diverged).
+    """
+    import drjit as dr
+    import mitsuba as mi
+
+    from mi_brdfs.bsdfspec import load_bsdf
+    from mi_brdfs.checks import batch
+    from mi_brdfs.fit.parameters import _fittable, _parameters, _written
+
+    models = {"rpv": {"type": "rpv", "rho_c": 0.1}, "hapke": {"type": "hapke"},
+              "ocean": {"type": "ocean"}}
+    for kind, spec in models.items():
+        bsdf = load_bsdf(spec)
+        params, _ = _parameters(bsdf, list(_fittable(bsdf)), kind)
+        assert len(params) == {"rpv": 4, "hapke": 6, "ocean": 4}[kind]
+        for end in (0, 1):  # every parameter at its lower end, then at its upper one
+            values = {p.name: p.decode(np.full(p.channels, p.x_range()[end])) for p in params}
+            load_bsdf(_written(params, values, spec)[0])  # a ParameterError, were one outside
+        by_name = {p.name: p for p in params}
+        if kind == "rpv":
+            assert (by_name["k"].lo, by_name["k"].hi) == (0.0, 3.0)
+    w = {p.name: p for p in _parameters(load_bsdf("hapke"), ["w"], "hapke")[0]}["w"]
+    bsdf = load_bsdf("hapke")
+    traversed = mi.traverse(bsdf)
+    x = mi.Float(w.hi)
+    dr.enable_grad(x)
+    traversed["w.value"] = x
+    traversed.update()
+    wi = np.array([[0.3, 0.1, 0.948683], [0.0, 0.6, 0.8]])
+    value = bsdf.eval(mi.BSDFContext(), batch.interaction(wi, 2), batch.vectors(wi[::-1]))
+    dr.backward(dr.sum(dr.sum(value)))
+    assert np.isfinite(dr.grad(x)[0]), dr.grad(x)
+
+
 # -------------------------------------------------------------------------------------------------
 # The variant a fit runs in, from the Python API (the caller's is handed back)
 # -------------------------------------------------------------------------------------------------

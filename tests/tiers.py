@@ -41,6 +41,9 @@ SLOW = {
         "test01_quick_campaign": WHOLE,
         "test02_quick_benchmark": WHOLE,
     },
+    "tests/campaign/test_earth_section.py": {
+        "test01_quick_section_rows": WHOLE,
+    },
     "tests/campaign/test_multiscatter_section.py": {
         "test01_quick_section_rows_values_and_figures": WHOLE,
         "test03_dielectric_tables_scaled_by_098_fail_the_furnace": DEEP,

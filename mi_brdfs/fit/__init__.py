@@ -39,8 +39,13 @@ after every step to the image of the parameter's valid range (each plugin's docs
 * ``lafortune``'s coefficients ``cx_i``, ``cy_i``, ``cz_i``: x = C, of any sign (with its
   default ``normalize`` the lobe depends on C/max|C| only, so C and λC are one lobe: leave one
   coefficient fixed, e.g. ``cx_i`` and ``cy_i`` at −1 with ``cz_i`` free);
-* reflectances, transmittances and ``rtls``'s kernel weights: x = ρ ∈ [0, 1]; any other
-  parameter: x = v ≥ 0.
+* reflectances, transmittances and ``rtls``'s kernel weights: x = ρ ∈ [0, 1];
+* the parameters of ``rpv`` (ρ0, its Minnaert k, g, ρc) and ``hapke`` (w, b, c, θ̄ in degrees,
+  B_0, h): x = v within the range the plugin takes (``mi_brdfs.plugins.rpv.RANGES``,
+  ``mi_brdfs.plugins.hapke.PARAMETERS``), but w ≤ 1 − 10⁻⁶ (H's derivative in w is infinite
+  at 1); ``ocean``'s wind speed: x = U ∈ [0, 37.54] m/s, its ``eta`` and ``ext_ior``:
+  x = (η − 1)/(η + 1), η ∈ [10⁻³, 10³] (the plugin takes η > 0);
+* any other parameter: x = v ≥ 0.
 
 A numbered parameter of ``lafortune`` (``exponent_1``, ``specular_reflectance_1``) is fitted as
 the parameter of its kind is.
@@ -218,7 +223,7 @@ def fit(target, model, free=None, *, pairs: int = 16384, steps: int = 800, lr: f
                      "surface), while its albedo E(θ) includes the transmitted part")
     spec, names = _prepare_model(model, free)
     bsdf = load_bsdf(spec)
-    params, given = _parameters(bsdf, names)
+    params, given = _parameters(bsdf, names, spec["type"])
     wi, wo, target_values = _target_values(target, target_bsdf, pairs, seed, notes)
     candidates = _starts(starts, spec, names, given, target, target_bsdf)
     runs = _run_starts(bsdf, params, candidates, wi, wo, target_values, steps, lr, model,

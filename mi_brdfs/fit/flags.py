@@ -24,8 +24,10 @@ EXACT = 1e-3
 
 def _natural_lower(name: str) -> bool:
     """Whether the lower bound of ``name`` is a physical value, not a limit of the model: k = 0
-    (a dielectric), a reflectance of 0 (no such lobe), σ at its floor (Lambert)."""
-    return name in ("k", "sigma") or base_name(name).endswith(("reflectance", "transmittance"))
+    (a dielectric), a reflectance of 0 (no such lobe), σ at its floor (Lambert), ``hapke``'s
+    B_0 = 0 or h = 0 (no opposition surge) and θ̄ = 0 (a smooth surface), a calm sea."""
+    return name in ("k", "sigma", "B_0", "h", "theta", "wind_speed") \
+        or base_name(name).endswith(("reflectance", "transmittance"))
 
 
 #: Models whose albedo at normal incidence is about ρd + ks (phong in its normalized form), or

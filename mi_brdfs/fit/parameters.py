@@ -43,8 +43,44 @@ def base_name(name: str) -> str:
     return re.sub(r"_[0-9]+$", "", name)
 
 
-def _bounds(name: str):
-    """(transform, lower, upper) of parameter ``name`` (see :mod:`mi_brdfs.fit`)."""
+#: The least index of refraction ``ocean`` is fitted with: it takes any η > 0 and ext_ior > 0,
+#: and (η − 1)/(η + 1) clamped at −1 would write η = 0.
+_IOR_MIN = 1e-3
+#: The largest single-scattering albedo ``hapke`` is fitted with: Hapke's H-function goes as
+#: γ = √(1 − w), whose derivative is infinite at w = 1 (a NaN gradient, and Adam diverges).
+_HAPKE_W_MAX = 1.0 - 1e-6
+
+
+def _plugin_bounds(kind: str | None, name: str):
+    """
+    (transform, lower, upper) of ``name`` where plugin ``kind`` takes a range of its own,
+    read from the plugin, else None: ``rpv``'s ρ0, k (a Minnaert exponent, not an extinction
+    coefficient), g and ρc; ``hapke``'s six (θ̄ in degrees); ``ocean``'s wind speed and
+    indices of refraction (> 0).
+    """
+    if kind == "rpv":
+        from ..plugins.rpv import RANGES
+        return ("linear", *RANGES[name][1:]) if name in RANGES else None
+    if kind == "hapke":
+        from ..plugins.hapke import PARAMETERS
+        if name not in PARAMETERS:
+            return None
+        return "linear", 0.0, _HAPKE_W_MAX if name == "w" else PARAMETERS[name][1]
+    if kind == "ocean":
+        from ..plugins.ocean import WIND_RANGE
+        if name == "wind_speed":
+            return ("linear", *WIND_RANGE)
+        if name in ("eta", "ext_ior"):
+            return "fresnel", _IOR_MIN, 1e3
+    return None
+
+
+def _bounds(name: str, kind: str | None = None):
+    """(transform, lower, upper) of parameter ``name`` of plugin ``kind`` (see
+    :mod:`mi_brdfs.fit`)."""
+    own = _plugin_bounds(kind, name)
+    if own is not None:
+        return own
     name = base_name(name)
     if name in ("alpha", "alpha_u", "alpha_v"):
         return "log", 1e-3, 2.0
@@ -239,13 +275,15 @@ def _accepted(model: dict, available: dict) -> dict:
     return {n: v for n, v in available.items() if n in model or n in missing}
 
 
-def _parameters(bsdf, names: list[str]) -> tuple[list[Parameter], dict]:
-    """The free parameters ``names`` of the loaded model, and their values {name: array}."""
+def _parameters(bsdf, names: list[str], kind: str | None = None
+                ) -> tuple[list[Parameter], dict]:
+    """The free parameters ``names`` of the loaded model (plugin ``kind``), and their values
+    {name: array}."""
     available = _fittable(bsdf)
     params = []
     for name in names:
         key, value = available[name]
-        params.append(Parameter(name, key, value.size, *_bounds(name)))
+        params.append(Parameter(name, key, value.size, *_bounds(name, kind)))
     given = {name: available[name][1] for name in names}
     return params, given
 

@@ -149,11 +149,11 @@ def _rpv(spec):
     textures."""
     from .rpv import K, RHO_0, RPV, G
     rho_0 = color(spec.get("rho_0"), RHO_0)
-    rest = [color(spec.get(name), default) for name, default in
-            (("k", K), ("g", G), ("rho_c", rho_0))]
-    if rho_0 is None or any(x is None for x in rest):
+    rest = [color(spec.get(name), default) for name, default in (("k", K), ("g", G))]
+    rho_c = color(spec["rho_c"]) if "rho_c" in spec else rho_0
+    if rho_0 is None or rho_c is None or any(x is None for x in rest):
         return None
-    return RPV(rho_0, *rest)
+    return RPV(rho_0, *rest, rho_c)
 
 
 def _hapke(spec):

@@ -213,3 +213,16 @@ def test11_structure(variant_scalar_rgb):
     """One component, glossy reflection on the front side; the string names every
     parameter; 0 below the surface."""
     assert_one_glossy_lobe(mi.load_dict(dict(type="rpv", **HOTSPOT)), "RPV", HOTSPOT)
+
+
+def test12_the_reference_of_a_spec_without_rho_c(variant_scalar_rgb):
+    """ρc = ρ0 where rho_c is not given, the plugin's default: the reference of such a spec
+    was None (no reference for the defaults), so that the albedo check compared sample() with
+    a quadrature of eval, not with the float64 model."""
+    from mi_brdfs import reference
+
+    for spec, rho in (({"type": "rpv"}, 0.1), ({"type": "rpv", "rho_0": 0.3, "k": 0.6}, 0.3)):
+        model = reference.for_spec(spec)
+        assert isinstance(model, ref.RPV), spec
+        assert (model.rho_0[0], model.rho_c[0]) == (rho, rho)
+    assert reference.for_spec({"type": "rpv", "rho_c": 0.5}).rho_c[0] == 0.5
