@@ -518,6 +518,7 @@ SLOW = {
             "args3-the renders differ in size"]),
     },
     "tests/test_earth.py": {
+        "test05_cli_plot_pp_and_the_furnace_white_sky": WHOLE,
         "test06_the_bundled_scene_renders": WHOLE,
     },
     "tests/test_fit.py": {
