@@ -193,4 +193,85 @@ FINDINGS = [
         reproducer=_DIR + "repro_ocean_legacy_reciprocity.py",
         source=_SRC + "ocean_legacy.cpp lines 489-490 (eval_underlight: t_d from the "
                       "downwelling table at wi, t_u from the upwelling table at wo)"),
+    Finding(
+        bsdf="selectbsdf", check=r"^crash$", configs="", verdict="defect", build=_BUILD,
+        summary=(
+            "The worker dies in the gradients check (the battery's last, not its first): "
+            "dr.forward through selectbsdf's eval aborts the process with Dr.Jit's fatal "
+            "'jit_var(rN): unknown variable!'. Once a selectbsdf is loaded, forward mode "
+            "aborts in any call through a BSDF pointer, another BSDF's too, and a prb render "
+            "of a scene holding a selectbsdf differentiated with dr.forward; primal "
+            "evaluation, dr.backward and JitFlag.SymbolicCalls = False work. selectbsdf "
+            "gathers a nested BSDF pointer and calls it from inside its own methods: a "
+            "symbolic call over the BSDF registry, which traces every registered BSDF, the "
+            "selectbsdf itself among them, so BSDF::eval is traced within a call of "
+            "BSDF::eval, and the forward-mode replay of that call aborts. Dr.Jit's own: a "
+            "pure-Python model (validation/audit/eradiate/drjit_nested_call_forward.py, a "
+            "dr.dispatch whose callable dispatches the same function one level deeper) "
+            "aborts the same way under Dr.Jit 1.2.0 (this build) and 1.5.0 (Mitsuba 3.9.1, "
+            "which has no selectbsdf: the 3.9 audit does not cover it), and works when the "
+            "inner call runs another function. Not our check: forward-mode derivatives are "
+            "part of the API (prb's render_forward)."),
+        reproducer=_DIR + "repro_selectbsdf_forward_ad.py",
+        source=_SRC + "selectbsdf.cpp lines 95-97, 104-106, 113-115, 124-126 (a nested "
+                      "BSDFPtr gathered and called); Dr.Jit v1.2.0 (the fork's ext/drjit) "
+                      "src/extra/call.cpp lines 302-310 (every registered instance traced), "
+                      "616 and 704 (CallOp::forward re-running each callable), 283-285 with "
+                      "Dr.Jit-Core src/api.cpp 187-189 (the recursion limit)",
+        issue=_DIR + "upstream/selectbsdf_forward_ad.md"),
+    Finding(
+        bsdf="ocean_grasp", check=r"^(energy|albedo)$", configs=r"wind 5 m/s",
+        verdict="defect", build=_BUILD,
+        when=lambda r: ("sample() nan" in r["message"] if r["check"] == "albedo"
+                        else isinstance(r["value"], float) and r["value"] <= 1.0),
+        summary=(
+            "One sample() weight of 10⁶ at θi = 15° is NaN (wind 5 m/s), so the sampled "
+            "albedo there is NaN: the albedo record, and the energy record, which fails on the "
+            "non-finite estimate although every finite E(θ) is below 1 (its message names the "
+            "largest finite one, 0.414 at 89°). The sample's wo = (3.6e-5, -7.8e-5, "
+            "1.0000001) has a float32 length just above 1 (reflect() of the facet normal), "
+            "and eval is NaN at any such direction: at wo = (0, 0, 1.0000001) eval is NaN, at "
+            "(0, 0, 1) it is 0.0326 (wi at 15°). The Smith term lambda(v, σ) takes "
+            "sqrt(1 - v.z²) unclamped: the square root of a negative number. Of little "
+            "consequence in a render (a NaN sample in about 10⁶), but a NaN where the model is "
+            "finite is the implementation's."),
+        reproducer=_DIR + "repro_ocean_grasp_glint_nan.py",
+        source=_SRC + "ocean_grasp.cpp lines 241-249 (lambda: dr::sqrt(1.f - v.z() * "
+                      "v.z())), 226 and 230 (G and the glint), 322 (sample's reflect)",
+        issue=_DIR + "upstream/ocean_grasp_glint_nan.md"),
+    Finding(
+        bsdf="ocean_grasp", check=r"^lobes$", configs="", verdict="defect", build=_BUILD,
+        summary=(
+            "With ctx.component = 1 (the glint) sample() still returns whitecap samples "
+            "(component 0, DiffuseReflection) in the proportion of the whitecap coverage: "
+            "184 of 200 000 at normal incidence with wind 5 m/s (the reproducer: 877 of 10⁶; "
+            "Monahan's coverage 2.95e-6 · U^3.52 = 8.5e-4 there; 9e-10 at the default 0.1 "
+            "m/s, where it is not seen). sample() draws foam from sample1 alone before it "
+            "looks at the context, whose has_diffuse only sets the split between the water's "
+            "two lobes; pdf() adds the foam's density whatever the context too, while eval() "
+            "leaves the whitecaps out unless the context enables them."),
+        reproducer=_DIR + "repro_ocean_grasp_component.py",
+        source=_SRC + "ocean_grasp.cpp lines 296-313 (foam drawn from sample1 alone), "
+                      "265-266 and 288-293 (the context's flags), 467-482 and 496 (pdf), 376 "
+                      "(eval); include/mitsuba/eradiate/oceanprops.h lines 330-336 (coverage)",
+        issue=_DIR + "upstream/ocean_grasp_component.md"),
+    Finding(
+        bsdf="blendbsdf", check=r"^lobes$", configs=r"textured", verdict="defect",
+        build=_BUILD,
+        summary=(
+            "Under Mitsuba 3.7.1 the textured-weight record (diffuse + conductor, weight 0.8 "
+            "at the check's uv) fails on the component offset alone: with ctx.component = 1 "
+            "(the conductor's lobe) every sample reports sampled_component 0; the albedos of "
+            "the lobes one by one add up to the whole (0.100 + 0.800 = 0.900, all lobes "
+            "0.901). sample() shifts ctx.component down for the second BSDF and returns its "
+            "BSDFSample3f without shifting sampled_component back up, as in 3.9.1. The "
+            "Dirac-weight defect that Mitsuba 3.9.1's audit gives this record "
+            "(validation/audit/repro_blendbsdf_delta_weight.py, exit 0 here) is not in "
+            "this build: 3.7.1's sample() returns each nested BSDF's own weight, not the "
+            "mixture's (3.9.1 gives 0.871 for the whole with the same reproducer)."),
+        reproducer=_DIR + "repro_blendbsdf_component_offset.py",
+        source="eradiate/mitsuba3 v0.5.0 (Mitsuba 3.7.1), src/bsdfs/blendbsdf.cpp lines "
+               "116-125 (ctx.component offset on the way in, line 120; the nested sample "
+               "returned unchanged) and 134-146 (each nested sample and weight copied as is)",
+        issue="validation/audit/upstream/blendbsdf_sampled_component.md"),
 ]
