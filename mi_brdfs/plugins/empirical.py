@@ -24,6 +24,25 @@ _samplers: OrderedDict = OrderedDict()
 KEPT = 16
 
 
+def sampler(key: tuple, density) -> warp.Sampler:
+    """The sampler of ``key`` (in this variant) from the cache, tabulated where it is not there
+    from the float64 function ``density()`` returns, f(wi, wo) → (...) (one channel)."""
+    key = (mi.variant(), *key)
+    if key not in _samplers:
+        _samplers[key] = warp.Sampler(*warp.density(density()))
+        while len(_samplers) > KEPT:
+            _samplers.popitem(last=False)
+    _samplers.move_to_end(key)
+    return _samplers[key]
+
+
+def given(names, values) -> str:
+    """The constant parameters as a warning at load names them: "a = 0.1, b = 0.2/0.3/0.4"
+    (one value per channel where they differ)."""
+    return ", ".join(f"{name} = {'/'.join(f'{x:g}' for x in v)}"
+                     for name, v in zip(names, values))
+
+
 def constant(tex) -> float | None:
     """The value of a texture that is the same everywhere (its mean over the channels), or
     None for one that varies over the surface or cannot say."""
@@ -79,15 +98,11 @@ class Surface:
     def sampler(self) -> warp.Sampler:
         """The sampler of the model at the constant values (shared by every surface of the
         same values in this variant), built from the float64 reference."""
-        key = (mi.variant(), self.plugin, *self.constants, *self.shape)
-        if key not in _samplers:
+        def mean_brdf():
             model = self.reference()
-            _samplers[key] = warp.Sampler(*warp.density(
-                lambda wi, wo: model.brdf(wi, wo).mean(axis=-1)))
-            while len(_samplers) > KEPT:
-                _samplers.popitem(last=False)
-        _samplers.move_to_end(key)
-        return _samplers[key]
+            return lambda wi, wo: model.brdf(wi, wo).mean(axis=-1)
+
+        return sampler((self.plugin, *self.constants, *self.shape), mean_brdf)
 
 
 def _reflects(value):

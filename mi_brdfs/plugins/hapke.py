@@ -242,8 +242,7 @@ class Hapke(mi.BSDF):
         per_channel = [tuple(v[k if len(v) > 1 else 0] for v in values) for k in range(n)]
         albedo, theta = max(max_albedo(*clip(c)) for c in per_channel)
         if albedo > 1.0:
-            given = ", ".join(f"{name} = {'/'.join(f'{x:g}' for x in v)}"
-                              for name, v in zip(PARAMETERS, values))
+            given = empirical.given(PARAMETERS, values)
             properties.warn(PLUGIN, f"{given}: the model's directional albedo reaches "
                                     f"{albedo:.3g} > 1 at θi = {theta:.0f}° (float64 "
                                     f"quadrature): it creates energy; values kept")

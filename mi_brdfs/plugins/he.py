@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections import OrderedDict
 
 import drjit as dr
 import mitsuba as mi
@@ -20,15 +19,10 @@ from ..errors import ParameterError
 from ..measured import warp
 from ..reference import he as reference
 from ..scattering import he as terms
-from . import lobes, properties
+from . import empirical, lobes, properties
 
 PLUGIN = "he"
 
-#: The samplers of this variant (this module runs once per variant), by the surface's
-#: parameters: every instance of one surface shares one; the latest :data:`KEPT` are kept (a
-#: fit or an optimisation moves σ0 and τ at every step).
-_samplers: OrderedDict = OrderedDict()
-KEPT = 16
 #: The phase variance g above which the sampler's density takes Beckmann's asymptote e^(−c/g)/g
 #: in place of a series summed to convergence (the ``paper`` reading's): that sum's cost grows
 #: as √g (hours at σ0 = 1000 µm), and above g = 1000 the asymptote differs from it by about
@@ -107,18 +101,14 @@ class Surface:
     def sampler(self) -> warp.Sampler:
         """The directional diffuse lobe's sampler, built from the float64 reference (shared
         by every instance of this surface)."""
-        key = self.key()
-        if key not in _samplers:
+        def directional_diffuse():
             reading = reference.VARIANTS[self.reading_name]
             if reading.terms is None and reading.rough_threshold is None and self.count is None:
                 reading = dataclasses.replace(reading, rough_threshold=SAMPLER_ROUGH)
             model = self.model(reading)
-            _samplers[key] = warp.Sampler(*warp.density(
-                lambda wi, wo: model.directional_diffuse(wi, wo).mean(axis=-1)))
-            while len(_samplers) > KEPT:
-                _samplers.popitem(last=False)
-        _samplers.move_to_end(key)
-        return _samplers[key]
+            return lambda wi, wo: model.directional_diffuse(wi, wo).mean(axis=-1)
+
+        return empirical.sampler((PLUGIN, *self.key()), directional_diffuse)
 
 
 class Specular(lobes.DeltaLobe):

@@ -223,8 +223,7 @@ class RPV(mi.BSDF):
             return
         start, e89, top = energy(*(tuple(v) for v in values))
         if start is not None:
-            given = ", ".join(f"{name} = {'/'.join(f'{x:g}' for x in v)}"
-                              for name, v in zip(RANGES, values))
+            given = empirical.given(RANGES, values)
             properties.warn(PLUGIN, f"{given}: the model's directional albedo exceeds 1 (it "
                                     f"creates energy) from θi = {start:g}° on, E(89°) = "
                                     f"{e89:.3g}, up to {top:.3g} at the horizon (the cosines "

@@ -212,8 +212,7 @@ class RTLS(mi.BSDF):
         share, low, (ti, to, phi) = negative(*(tuple(v) for v in values),
                                              self.m_h, self.m_r, self.m_b)
         if low < 0:
-            given = ", ".join(f"{name} = {'/'.join(f'{x:g}' for x in v)}"
-                              for name, v in zip(DEFAULTS, values))
+            given = empirical.given(DEFAULTS, values)
             properties.warn(PLUGIN, f"{given}: the kernel model's BRF goes below 0 on "
                                     f"{100 * share:.2g} % of the direction pairs (weighted by "
                                     f"cosθi cosθo), down to {low:.3g} at θi = {ti:.2f}°, θo = "
