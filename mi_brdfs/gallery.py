@@ -180,6 +180,11 @@ ROWS: tuple[Row, ...] = (
          ("surge: θ̄ = 20°, B_0 = 1, h = 0.06", {"theta": 20.0, "B_0": 1.0, "h": 0.06}))),
     Row("ocean", "Cox & Munk's sea, water η = 1.33", {"type": "ocean"},
         tuple((f"U = {u:g} m/s", {"wind_speed": u}) for u in (1.0, 5.0, 15.0))),
+    Row("hk", "Hanrahan-Krueger slab, σs = 2, σa = 0.2, d = 0.5, η = 1.33",
+        {"type": "hk", "sigma_s": 2.0, "sigma_a": 0.2, "thickness": 0.5, "eta": 1.33},
+        (("backward: g = −0.5", {"g": -0.5}),
+         ("isotropic: g = 0", {"g": 0.0}),
+         ("forward: g = 0.7", {"g": 0.7}))),
 )
 
 # The layout, in pixels (the PNG is written at DPI dots per inch, so 1 pt = DPI/72 px).

@@ -54,6 +54,7 @@ PLUGINS = {
     "rpv": ("mi_brdfs.plugins.rpv", "RPV"),
     "hapke": ("mi_brdfs.plugins.hapke", "Hapke"),
     "ocean": ("mi_brdfs.plugins.ocean", "Ocean"),
+    "hk": ("mi_brdfs.plugins.hk", "HK"),
 }
 
 # variant -> {plugin id -> class}

@@ -59,6 +59,11 @@ BOUNDS = {
               {"wind_speed": 0.0, "wind_direction": 0.0, "eta": 1e6, "k": 1e6, "ext_ior": 1e-6},
               {"wind_speed": 37.54, "whitecaps": 1.0, "wind_direction": 90.0},
               {"wind_speed": 37.54, "whitecaps": True, "shadowing": False}],
+    "hk": [{"sigma_s": s, "sigma_a": a, "thickness": t, "g": g, "eta": eta}
+           for s, a in ((0.0, 0.0), (1e6, 0.0), (0.0, 1e6), (1e6, 1e6))
+           for t, g, eta in ((1e-6, -0.99, 1.0), (1e6, 0.99, 1e6))] +
+          [{"sigma_s": 1e6, "thickness": 1e6, "g": 0.99, "eta": 1e6, "diffuse_reflectance": 1.0},
+           {"sigma_s": 0.0, "thickness": 1e-6, "eta": 1.0, "diffuse_reflectance": 1.0}],
 }
 
 

@@ -47,6 +47,7 @@ PLUGINS = {
     "rpv": ("rho_0", {"k": 0.6, "g": -0.2}),
     "hapke": ("w", {"B_0": 1.0, "h": 0.06}),
     "ocean": ("whitecaps", {"wind_speed": 10.0, "wind_direction": 30.0}),
+    "hk": ("sigma_s", {"eta": 1.5, "g": 0.5}),
 }
 
 
