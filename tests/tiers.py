@@ -44,6 +44,10 @@ SLOW = {
     "tests/campaign/test_earth_section.py": {
         "test01_quick_section_rows": WHOLE,
     },
+    "tests/campaign/test_hk_section.py": {
+        "test01_quick_section_rows": WHOLE,
+        "test02_without_the_n2_law_the_comparison_fails": DEEP,
+    },
     "tests/campaign/test_multiscatter_section.py": {
         "test01_quick_section_rows_values_and_figures": WHOLE,
         "test03_dielectric_tables_scaled_by_098_fail_the_furnace": DEEP,

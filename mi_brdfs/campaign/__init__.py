@@ -13,13 +13,13 @@ from .core import Context, Section, run
 
 def sections() -> list:
     """The report's sections, in order."""
-    from . import (anisotropy, ashikhmin, claims, cooktorrance, earth, extremes, fits, he,
+    from . import (anisotropy, ashikhmin, claims, cooktorrance, earth, extremes, fits, he, hk,
                    lafortune, lambert, measured, multiscatter, orennayar, phong, transmission,
                    ward)
     return [lambert.section, phong.section, cooktorrance.section, anisotropy.section,
             transmission.section, multiscatter.section, ward.section, orennayar.section,
             lafortune.section, ashikhmin.section, fits.section, measured.section,
-            he.section, earth.section, claims.section, extremes.section]
+            he.section, earth.section, hk.section, claims.section, extremes.section]
 
 
 __all__ = ["Context", "Section", "run", "sections"]

@@ -225,7 +225,10 @@ class HK(mi.BSDF):
     reflection, as the paper's first-order term; ``scattering = all`` (the higher orders) is
     refused in this version. ``mi_brdfs.reference.hk`` is the model in float64 with a
     float64 random walk of the whole transport, against which the single term is tested
-    (``tests/reference/test_hk_reference.py``).
+    (``tests/reference/test_hk_reference.py``); the plugin is validated against Mitsuba's
+    own volumetric path tracer (``volpath`` on the same slab built as a scene, ``max_depth``
+    limited to single scattering, over a grid of albedo, optical thickness, g and η:
+    ``mi-brdfs validate --only hk``, docs/validation.md).
 
     **Components.** 0: the scattered light, glossy reflection and (without a base)
     transmission; 1: the unscattered beam (null), without a base; last: the mirror reflection
@@ -233,7 +236,7 @@ class HK(mi.BSDF):
     medium on both sides.
 
     **Sampling.** Component 0 is drawn from a mixture of Henyey-Greenstein's lobe of g about
-    −ωi (share 0.25 + 0.5|g|: the phase function itself where η = 1, so that a forward- or
+    −ωi (share 0.25 + 0.5·abs(g): the phase function itself where η = 1, so that a forward- or
     back-scattering layer is sampled along its peak) and the cosine-weighted hemispheres of
     both sides (of the reflecting side alone over a base), with its exact density; the delta
     components in proportion to their values, against an estimate of the scattered share.
