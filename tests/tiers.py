@@ -207,6 +207,11 @@ SLOW = {
         "test08_flags_traverse_and_gradient": DEEP,
         "test10_stability": DEEP,
     },
+    "tests/plugins/test_cooktorrance_film.py": {
+        "test06_compensated_white_furnace_with_a_film": DEEP,
+        "test07_gradient_through_the_thickness": DEEP,
+        "test08_rgb_gradient_through_the_film_index": DEEP,
+    },
     "tests/plugins/test_cooktorrance_multiscatter.py": {
         "test01_a_table_slice_rebuilds": (MORE, ["beckmann-vcavity-40"]),
         "test02_table_interpolation_matches_numpy": (MORE, ["llvm_ad_rgb"]),
@@ -514,6 +519,9 @@ SLOW = {
             "mirror-normal-50.0", "mirror-grazing-1.0", "mirror-grazing-50.0",
             "halfway-normal-1.0", "halfway-normal-50.0", "halfway-grazing-1.0",
             "halfway-grazing-50.0"]),
+    },
+    "tests/scattering/test_thinfilm.py": {
+        "test03_colour_equals_the_integrated_reference": DEEP,
     },
     "tests/test_bsdfspec.py": {
         "test01_every_entry_point_takes_every_form": (MORE, [

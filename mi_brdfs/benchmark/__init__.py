@@ -11,7 +11,7 @@ are reported met or missed in the report's summary.
 def sections() -> list:
     """The report's sections, in order."""
     from . import (backends, earth, error_time, he, hk, measured, models, precision, strategies,
-                   user_scene)
+                   thinfilm, user_scene)
     return [backends.section, error_time.section, strategies.section, measured.section,
-            he.section, earth.section, hk.section, models.section, precision.section,
-            user_scene.section]
+            he.section, earth.section, hk.section, thinfilm.section, models.section,
+            precision.section, user_scene.section]

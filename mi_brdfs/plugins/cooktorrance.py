@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..scattering import microfacet, multiscatter
 from ..scattering.fresnel import IOR_MAX
-from . import lobes, properties
+from . import cooktorrance_film, lobes, properties
 from .cooktorrance_conductor import Compensation, MicrofacetReflection
 from .cooktorrance_dielectric import InterfaceCompensation, MicrofacetInterface
 from ..materials import conductor_ior, conductor_names, dielectric_ior, material_ior  # noqa: F401
@@ -235,6 +235,19 @@ class CookTorrance(mi.BSDF):
        - With ``transmission``: factor on the refraction lobe, within [0, 1] (Default: 1.0)
        - |exposed|, |differentiable|
 
+     * - film_thickness
+       - |float| or |texture|
+       - Thickness (nm) of a thin film over the surface, one value per point within
+         [0, 10⁵] (a texture gives an oil slick's colours); with a conductor or with
+         ``transmission``. Absent or 0: no film, and no cost (Default: 0)
+       - |exposed|, |differentiable|
+
+     * - film_eta
+       - |float| or |texture|
+       - The film's real index of refraction relative to the exterior (as ``eta`` is), within
+         (0, 100]; needs ``film_thickness`` (Default: 1.33, water)
+       - |exposed|, |differentiable|
+
      * - preset
        - |string|
        - A published fit that fills every parameter the scene does not give (explicit ones
@@ -350,6 +363,29 @@ class CookTorrance(mi.BSDF):
     added to the lobe's matrix. With ``transmission`` both lobes are depolarizers, as
     ``roughdielectric``'s are in Mitsuba 3.9.1.
 
+    **Thin film** (``film_thickness`` > 0; Born & Wolf, "Principles of Optics", §7.6.1;
+    Belcour & Barla 2017, "A Practical Extension to Microfacet Theory for the Modeling of
+    Varying Iridescence", §4). A layer of index ``film_eta`` and the given thickness covers
+    the base; the light reflected back and forth in it interferes, and the film's
+    reflectance R, the Airy sum of the Fresnel amplitudes (with their phase shifts) of its
+    two interfaces for s and p light, replaces F at the microfacet's cosine ωi·m
+    (:mod:`mi_brdfs.scattering.thinfilm`); refraction takes 1 − R (the film absorbs
+    nothing: R + T = 1 at every wavelength and angle), and the choice between reflection and
+    refraction is made by the mean of R over the channels. Spectral variants evaluate R
+    exactly at each sampled wavelength. RGB and mono variants integrate R against each
+    channel's sensitivity (Mitsuba's CIE 1931 colour-matching functions under D65, to linear
+    sRGB), in Fourier space as Belcour & Barla do, with the sensitivities' transforms
+    tabulated rather than fitted, and tabulated once per material over (cosθ, thickness)
+    where the indices are constants and the thickness's range is known (colours outside
+    sRGB's gamut clipped into it): an RGB render agrees with the spectral render of the same
+    scene developed to sRGB (docs/thinfilm.md measures it). Polarized variants return the
+    film's Mueller matrix (Mitsuba's Fresnel matrix without a film; in mono polarized
+    variants at the channel's mean wavelength). With ``multiscatter`` on a conductor, F_avg
+    is the film's (a 5-node rule at the hit point), so a non-absorbing film on a perfect
+    mirror keeps the white furnace at 1; ``multiscatter`` with ``transmission`` and a film is
+    refused (the dielectric's albedo tables are of the bare interface), as are a film with
+    ``fresnel`` other than ``exact`` and ``film_eta`` without ``film_thickness``.
+
     .. tabs::
         .. code-tab:: xml
 
@@ -396,6 +432,9 @@ class CookTorrance(mi.BSDF):
         #: Factor on the microfacet (reflection) lobe.
         self.m_specular_reflectance = properties.reflectance(props, PLUGIN,
                                                              "specular_reflectance", 1.0)
+        #: The thin film (cooktorrance_film.Film), None without one.
+        self.m_film = cooktorrance_film.read(props, PLUGIN, self.m_transmission, self.m_fresnel,
+                                             self.m_multiscatter)
         if self.m_transmission:
             self._read_transmission(props)
         else:
@@ -471,6 +510,9 @@ class CookTorrance(mi.BSDF):
             cb.put("specular_transmittance", self.m_specular_transmittance, DIFFERENTIABLE)
         if self.m_diffuse_reflectance is not None:
             cb.put("diffuse_reflectance", self.m_diffuse_reflectance, DIFFERENTIABLE)
+        if self.m_film is not None:
+            cb.put("film_thickness", self.m_film.thickness, DIFFERENTIABLE)
+            cb.put("film_eta", self.m_film.eta, DIFFERENTIABLE)
 
     def parameters_changed(self, keys=()):
         """The lobes, from the parameters as they are now."""
@@ -486,7 +528,7 @@ class CookTorrance(mi.BSDF):
             single = MicrofacetInterface(
                 self.m_distribution, self.m_alpha_u, self.m_alpha_v, self.m_sample_visible,
                 eta, self.m_specular_reflectance, self.m_specular_transmittance,
-                (REFLECTION_FLAGS | aniso, TRANSMISSION_FLAGS | aniso), tables)
+                (REFLECTION_FLAGS | aniso, TRANSMISSION_FLAGS | aniso), tables, self.m_film)
             compensation = None if tables is None else InterfaceCompensation(single)
         else:
             table = multiscatter.conductor_table(self.m_distribution, self.m_shadowing,
@@ -494,7 +536,7 @@ class CookTorrance(mi.BSDF):
             single = MicrofacetReflection(
                 self.m_distribution, self.m_alpha_u, self.m_alpha_v, self.m_shadowing,
                 self.m_fresnel, self.m_sample_visible, self.m_eta, self.m_k,
-                self.m_specular_reflectance, GLOSSY_FLAGS | aniso, table)
+                self.m_specular_reflectance, GLOSSY_FLAGS | aniso, table, self.m_film)
             compensation = None if table is None else Compensation(single)
         terms = [single, compensation]
         if self.m_diffuse_reflectance is not None:
@@ -521,6 +563,9 @@ class CookTorrance(mi.BSDF):
             alpha = f"  alpha = {properties.indent(self.m_alpha_u)},\n"
         diffuse = properties.indent(self.m_diffuse_reflectance) \
             if self.m_diffuse_reflectance is not None else "0 (no diffuse lobe)"
+        film = "" if self.m_film is None else (
+            f",\n  film_thickness = {properties.indent(self.m_film.thickness)},\n"
+            f"  film_eta = {properties.indent(self.m_film.eta)}")
         return (f"CookTorrance[\n"
                 f"  distribution = {self.m_distribution},\n"
                 f"  shadowing = {self.m_shadowing},\n"
@@ -530,5 +575,5 @@ class CookTorrance(mi.BSDF):
                 f"{alpha}"
                 f"{ior}"
                 f"  specular_reflectance = {properties.indent(self.m_specular_reflectance)},\n"
-                f"  diffuse_reflectance = {diffuse}\n"
+                f"  diffuse_reflectance = {diffuse}{film}\n"
                 f"]")

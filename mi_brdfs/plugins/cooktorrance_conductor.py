@@ -38,13 +38,18 @@ class MicrofacetReflection(lobes.Lobe):
     Parameter ``eta``, ``k`` (mi.Texture | None): the complex index (None with ``fresnel``
     'none'). Parameter ``specular`` (mi.Texture): ks. Parameter ``table``
     (multiscatter.AlbedoTable | None): the lobe's own albedo E(μ) with F ≡ 1, which a
-    :class:`Compensation` of it needs (it then weighs the lobe as well).
+    :class:`Compensation` of it needs (it then weighs the lobe as well). Parameter ``film``
+    (:class:`~mi_brdfs.plugins.cooktorrance_film.Film` | None): a thin film over the base,
+    whose reflectance replaces the exact F (``fresnel`` 'exact').
     """
 
     kind = "GlossyReflection"
 
     def __init__(self, kind, alpha_u, alpha_v, masking, fresnel, sample_visible, eta, k,
-                 specular, flags, table=None):
+                 specular, flags, table=None, film=None):
+        self.film = film
+        #: the film's colour tabulated where it can be (RGB and mono variants)
+        self.film_table = None if film is None else film.tabulate([(1.0, eta, k)])
         self.distribution_kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
         self.masking, self.sample_visible = microfacet.MASKING[masking], sample_visible
         self.fresnel, self.fresnel_term = fresnel, FRESNEL_TERMS[fresnel]
@@ -56,7 +61,7 @@ class MicrofacetReflection(lobes.Lobe):
         #: sampled ones (the quadrature inside every lookup made a compensated conductor's
         #: kernel about three times larger than the rest of it, and as slow to compile).
         self.f_avg = self.f_avg_table = None
-        if table is not None and fresnel != "none" and \
+        if table is not None and fresnel != "none" and film is None and \
                 not (eta.is_spatially_varying() or k.is_spatially_varying()):
             if mi.is_spectral:
                 self.f_avg_table = SpectralAverage(self)
@@ -158,6 +163,8 @@ class MicrofacetReflection(lobes.Lobe):
     def _fresnel_average(self, si, active, nodes: int = 5):
         eta = properties.clip_at(self.eta, si, active, 0.0, fresnel.IOR_MAX)
         k = properties.clip_at(self.k, si, active, 0.0, fresnel.IOR_MAX)
+        if self.film is not None:
+            return self.film.average(si, eta, k, active, nodes)
         if self.fresnel == "exact":
             return multiscatter.fresnel_average(eta, k, nodes)
         return multiscatter.schlick_average(fresnel.r0(eta, k))
@@ -168,10 +175,13 @@ class MicrofacetReflection(lobes.Lobe):
         (:func:`~mi_brdfs.scattering.fresnel.polarized_reflection`), as ``roughconductor``."""
         if not (mi.is_polarized and self.fresnel == "exact"):
             return self._ks_f(si, t.cos_im, factor, active)
-        F = fresnel.polarized_reflection(
-            si.wi, wo, t.m, properties.clip_at(self.eta, si, active, 0.0, fresnel.IOR_MAX),
-            properties.clip_at(self.k, si, active, 0.0, fresnel.IOR_MAX),
-            ctx.mode == mi.TransportMode.Radiance)
+        eta = properties.clip_at(self.eta, si, active, 0.0, fresnel.IOR_MAX)
+        k = properties.clip_at(self.k, si, active, 0.0, fresnel.IOR_MAX)
+        radiance = ctx.mode == mi.TransportMode.Radiance
+        if self.film is None:
+            F = fresnel.polarized_reflection(si.wi, wo, t.m, eta, k, radiance)
+        else:
+            F = self.film.mueller(si, si.wi, wo, t.m, eta, k, radiance, active)
         # F scaled per channel: the product with the diagonal matrix of ks·factor
         scale = mi.UnpolarizedSpectrum(properties.clip_at(self.specular, si, active) * factor)
         return F @ mi.Spectrum(scale)
@@ -179,6 +189,12 @@ class MicrofacetReflection(lobes.Lobe):
     def _ks_f(self, si, cos_theta, factor, active):
         """ks·factor·F(cosθ), F at the cosine between ωi and the facet normal."""
         value = properties.clip_at(self.specular, si, active) * factor
+        if self.film is not None:
+            return value * self.film.reflectance(
+                si, cos_theta, 1.0, properties.clip_at(self.eta, si, active, 0.0,
+                                                       fresnel.IOR_MAX),
+                properties.clip_at(self.k, si, active, 0.0, fresnel.IOR_MAX), active,
+                table=self.film_table)
         if self.fresnel_term is not None:
             value = value * self.fresnel_term(
                 cos_theta, properties.clip_at(self.eta, si, active, 0.0, fresnel.IOR_MAX),

@@ -16,6 +16,7 @@ from types import SimpleNamespace
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
 from ..scattering import fresnel, microfacet, multiscatter, vector
 from . import lobes, properties
@@ -35,13 +36,23 @@ class MicrofacetInterface(lobes.Lobe):
     Parameter ``tables`` ((multiscatter.AlbedoTable, multiscatter.AlbedoTable) | None): the
     interface's own albedo E_R+T lit from above and from below
     (:func:`~mi_brdfs.scattering.multiscatter.dielectric_tables`), which an
-    :class:`InterfaceCompensation` of it needs (it then weighs the lobe as well).
+    :class:`InterfaceCompensation` of it needs (it then weighs the lobe as well). Parameter
+    ``film`` (:class:`~mi_brdfs.plugins.cooktorrance_film.Film` | None): a thin film on the
+    interface: its reflectance R per channel replaces F, refraction takes 1 − R (the film
+    absorbs nothing: R + T = 1), and the choice between them is made by the mean of R.
     """
 
     kind = "GlossyReflection"
 
     def __init__(self, kind, alpha_u, alpha_v, sample_visible, eta, specular, transmittance,
-                 flags, tables=None):
+                 flags, tables=None, film=None):
+        self.film = film
+        #: the densest medium light arrives from (the film's branches depend on it)
+        value = float(np.asarray(eta, np.float64).ravel()[0])
+        self.n1_max = max(1.0, value)
+        #: the film's colour from outside and from inside, tabulated where it can be
+        self.film_table = None if film is None else \
+            film.tabulate([(1.0, value, 0.0), (value, 1.0, 0.0)])
         self.distribution_kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
         self.sample_visible, self.flags = sample_visible, flags
         # the relative index both ways (opaque: a changed η updates the kernel's inputs)
@@ -98,7 +109,12 @@ class MicrofacetInterface(lobes.Lobe):
         t = self._terms(ctx, si, wo, active)
         if t is None:
             return mi.Spectrum(0.0), mi.Float(0.0)
-        chosen = _chosen(t.lobe_f) if all(self.sides(ctx)) else t.lobe_f
+        if not all(self.sides(ctx)):
+            chosen = t.lobe_spec
+        elif self.film is None:
+            chosen = _chosen(t.lobe_f)
+        else:  # chosen by the mean of R, weighted by R per channel
+            chosen = _chosen(t.lobe_f) * t.lobe_spec / dr.maximum(t.lobe_f, 1e-30)
         if self.sample_visible:
             shape = t.g1_wo
         else:
@@ -136,9 +152,11 @@ class MicrofacetInterface(lobes.Lobe):
         masking = microfacet.Smith(distr)
         t = SimpleNamespace(reflect=reflect, eta=eta, m=m, cos_im=cos_im, cos_om=cos_om,
                             active=active, D=distr.ndf(m),
-                            F=fresnel.dielectric(cos_im, self.eta)[0],
                             g1_wi=masking.G1(wi, m, cos_im), g1_wo=masking.G1(wo, m, cos_om))
-        t.lobe_f = dr.select(reflect, t.F, 1.0 - t.F)
+        # F: the bare interface's, or the film's per channel (then the choice takes its mean)
+        t.F, f_pick = self.reflectance(si, cos_im, active)
+        t.lobe_f = dr.select(reflect, f_pick, 1.0 - f_pick)
+        t.lobe_spec = t.lobe_f if self.film is None else dr.select(reflect, t.F, 1.0 - t.F)
         # the density of the normal (visible normals of the turned ωi, or the widened D·cos),
         # the lobe's probability, and the Jacobian of ωo
         if self.sample_visible:
@@ -169,6 +187,8 @@ class MicrofacetInterface(lobes.Lobe):
         # a normal drawn from D·cos may face away from ωi: no sample (as G1(ωi) = 0 there)
         valid = cos_im * cos_i > 0.0
         F, cos_t, _, eta_ti = fresnel.dielectric(cos_im, self.eta)
+        if self.film is not None:
+            F = self.reflectance(si, cos_im, active, pick=True)
         pick_r = (sample1 <= F) if (has_r and has_t) else has_r
         wo = lobes.choose(pick_r, lambda: vector.reflect(wi, m),
                           lambda: vector.refract(wi, m, cos_t, eta_ti))
@@ -178,6 +198,22 @@ class MicrofacetInterface(lobes.Lobe):
         same_side = cos_i * wo.z > 0.0
         unit = dr.abs(vector.dot(wo, wo) - 1.0) < 1e-3
         return wo, valid & dr.select(pick_r, same_side, (cos_i * wo.z < 0.0) & unit)
+
+    def reflectance(self, si, cos_im, active, pick: bool = False):
+        """(F, the probability of choosing reflection) at the facet cosine ``cos_im`` (signed:
+        from inside below 0): the bare interface's F twice, or the film's reflectance per
+        channel and its mean; with ``pick``, the probability alone."""
+        if self.film is None:
+            F = fresnel.dielectric(cos_im, self.eta)[0]
+            return F if pick else (F, F)
+        outside = cos_im >= 0.0
+        n1, n3 = dr.select(outside, 1.0, self.eta), dr.select(outside, self.eta, 1.0)
+        args = (si, dr.abs(cos_im), n1, n3, 0.0, active, self.n1_max, self.film_table,
+                dr.select(outside, mi.UInt32(0), mi.UInt32(1)))
+        if pick:
+            return self.film.mean_reflectance(*args)
+        F = self.film.reflectance(*args)
+        return F, dr.mean(F)
 
     def _sample_normal(self, si, wi_up, active, sample2):
         """A microfacet normal for ωi turned up (``wi_up``): visible normals, or D·cosθ of the

@@ -139,7 +139,7 @@ def polarized_reflection(wi, wo, m, eta, k, radiance: bool):
     are the conventions of ``roughconductor`` (``src/bsdfs/roughconductor.cpp``), whose
     polarized values the plugin reproduces.
     """
-    wo_hat, wi_hat = (wo, wi) if radiance else (wi, wo)
+    wo_hat = wo if radiance else wi
     cos_theta = dot(wo_hat, m)
     channels = [mi.mueller.specular_reflection(cos_theta, mi.Complex2f(eta[c], k[c]))
                 for c in range(len(eta))]
@@ -147,6 +147,15 @@ def polarized_reflection(wi, wo, m, eta, k, radiance: bool):
     for i in range(4):
         for j in range(4):
             M[i, j] = mi.UnpolarizedSpectrum(*(channel[i, j] for channel in channels))
+    return rotate_reflection(M, wi, wo, m, radiance)
+
+
+def rotate_reflection(M, wi, wo, m, radiance: bool):
+    """The Mueller matrix ``M`` of a reflection at the facet ``m``, laid out as
+    ``mi.mueller.specular_reflection`` (s axis perpendicular to the plane of reflection),
+    rotated into the Stokes bases of the directions of travel, as
+    :func:`polarized_reflection` describes."""
+    wo_hat, wi_hat = (wo, wi) if radiance else (wi, wo)
     s_in, s_out = dr.cross(m, -wo_hat), dr.cross(m, wi_hat)
     collinear = dr.all(s_in == 0.0)
     x_axis = mi.Vector3f(1.0, 0.0, 0.0)
