@@ -308,6 +308,10 @@ SLOW = {
         "test09_traverse_update_and_gradient": DEEP,
         "test10_bad_reflectance": (MORE, ["llvm_ad_rgb-above1"]),
     },
+    "tests/plugins/test_matrix.py": {
+        "test02_every_plugin_with_every_texture_kind": (MORE, ["llvm_ad_mono",
+                                                               "llvm_ad_spectral"]),
+    },
     "tests/plugins/test_merl.py": {
         "test01_create": (MORE, [
             "llvm_ad_rgb", "scalar_spectral", "llvm_ad_spectral", "llvm_ad_mono"]),
