@@ -56,7 +56,7 @@ def _one(ctx: Context, s: Section, label: str, spec: str, judged: bool) -> tuple
         s.rows.append(Row(label, "time to 1 % rel. RMSE in the furnace, cosine sampling / "
                           "the plugin's", shown, f"> {TARGET_SAMPLING:g}×",
                           bool(speedup > TARGET_SAMPLING)))
-    return (label, f"{per['merl']:.1f} ns", f"{ratio:.3f}×", error_time.seconds_text(t_own),
+    return (label, f"{per['bsdf']:.1f} ns", f"{ratio:.3f}×", error_time.seconds_text(t_own),
             error_time.seconds_text(t_cos), f"**{shown}**")
 
 

@@ -32,7 +32,7 @@ def _one(ctx: Context, s: Section, label: str, spec: str) -> tuple:
     s.values[f"hk, {label}: render time"] = f"{ratio:.3f}×"
     s.rows.append(Row(f"hk vs cooktorrance, {label}", f"{ctx.variant} render time ratio",
                       f"{ratio:.3f}×", f"≤ {TARGET_COST}×", ratio <= TARGET_COST))
-    return (label, f"{per['merl']:.1f} ns", f"{per['cooktorrance']:.1f} ns", f"{ratio:.3f}×")
+    return (label, f"{per['bsdf']:.1f} ns", f"{per['against']:.1f} ns", f"{ratio:.3f}×")
 
 
 def section(ctx: Context) -> Section:

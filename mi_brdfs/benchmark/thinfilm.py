@@ -7,12 +7,9 @@ at each sampled wavelength), on a conductor and on a dielectric interface.
 
 from __future__ import annotations
 
-import mitsuba as mi
-
 from ..campaign.core import SKIPPED, Context, Row, Section, md_table
-from ..scenes import load_scene
-from ..timing import interleaved, median, median_ratio
 from ..variants import variant_kept
+from .measured import render_cost
 
 FILM = "film_thickness=300 film_eta=1.4"
 #: (label, cooktorrance without the film): each is rendered with :data:`FILM` added.
@@ -25,23 +22,6 @@ SPECTRAL = "llvm_ad_spectral"
 TARGET_COST = 1.15
 
 
-def film_cost(bare: str, res: int, spp: int, repeats: int) -> tuple[float, dict]:
-    """(ratio, ns per sample of each): ``bare`` with :data:`FILM` against ``bare`` on every
-    sphere of the showcase, the median of per-repeat ratios of interleaved renders after a
-    first render of each (the JIT compilation apart)."""
-    from .error_time import SCENES
-
-    ids = SCENES["showcase"]
-    scenes = {k: load_scene("showcase", {"res": str(res)}, bsdfs={i: spec for i in ids})
-              for k, spec in (("film", f"{bare} {FILM}"), ("bare", bare))}
-    for scene in scenes.values():
-        mi.render(scene, spp=spp)
-    times = interleaved({k: (lambda sc=sc: mi.render(sc, spp=spp)) for k, sc in scenes.items()},
-                        repeats=repeats, warmup=0)
-    per = {k: median(t) / (res * res * spp) * 1e9 for k, t in times.items()}
-    return median_ratio(times, "film", "bare"), per
-
-
 def _one(ctx: Context, s: Section, variant: str, label: str, bare: str) -> tuple:
     """One configuration in one variant: its row of the table and its summary row."""
     name = f"film, {label}, {variant}: render time"
@@ -52,11 +32,12 @@ def _one(ctx: Context, s: Section, variant: str, label: str, bare: str) -> tuple
 
     with variant_kept():
         use_variant(variant)
-        ratio, per = film_cost(bare, ctx.n(128, 32), ctx.n(32, 4), ctx.n(15, 2))
+        ratio, per = render_cost(f"{bare} {FILM}", ctx.n(128, 32), ctx.n(32, 4),
+                                 ctx.n(15, 2), against=bare)
     s.values[name] = f"{ratio:.3f}×"
     s.rows.append(Row(f"cooktorrance film vs none, {label}", f"{variant} render time ratio",
                       f"{ratio:.3f}×", f"≤ {TARGET_COST}×", ratio <= TARGET_COST))
-    return (label, variant, f"{per['film']:.1f} ns", f"{per['bare']:.1f} ns", f"{ratio:.3f}×")
+    return (label, variant, f"{per['bsdf']:.1f} ns", f"{per['against']:.1f} ns", f"{ratio:.3f}×")
 
 
 def section(ctx: Context) -> Section:
