@@ -154,8 +154,8 @@ def _table(results: dict) -> str:
              f"start past a line |", "|---|---|---|---|---|---|---|---|"]
     for layout, runs in results.items():
         ratios = [r["ratio"] for r in runs]
-        merl = statistics.median(r["ns"]["merl"] for r in runs)
-        ct = statistics.median(r["ns"]["cooktorrance"] for r in runs)
+        merl = statistics.median(r["ns"]["bsdf"] for r in runs)
+        ct = statistics.median(r["ns"]["against"] for r in runs)
         high = sum(x > TARGET for x in ratios)
         lines.append(f"| {layout} | {statistics.median(ratios):.3f}× | {min(ratios):.3f}–"
                      f"{max(ratios):.3f}× | {high} of {len(ratios)} | {merl:.1f} ns | "
