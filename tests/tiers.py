@@ -280,13 +280,12 @@ SLOW = {
             "holzschuch-intermediate", "holzschuch-rough"]),
         "test04_spectral_variants_evaluate_at_the_sampled_wavelengths": DEEP,
         "test06_the_smooth_limit": DEEP,
-        "test07_sampling_matches_pdf": (MORE, ["80.0"]),
+        "test07_sampling_matches_pdf": DEEP,  # he's χ² (kernels of 6 s); warp's in test_merl
         "test08_consistent_reciprocal_and_efficient": DEEP,
         "test09_sigma0_through_traverse": DEEP,
         "test11_stable_from_smooth_to_rough": DEEP,
         "test12_a_smooth_surface_in_scalar_variants": (MORE, ["scalar_spectral"]),
-        "test13_sigma0_and_tau_out_of_range_through_traverse": (MORE, [
-            "tau-0.0-0.001", "tau--1.0-0.001", "sigma0-2000.0-1000.0", "tau-100000.0-10000.0"]),
+        "test13_sigma0_and_tau_out_of_range_through_traverse": DEEP,
         "test14_a_render_with_both_below_range_and_gradients_inside": DEEP,
         "test16_the_centred_window_in_float32_to_he_s_bounds": (MORE, ["llvm_ad_rgb-20.0"]),
     },
