@@ -76,3 +76,16 @@ def compare(ours, theirs, tol, wi, wo, what, excused=None) -> tuple[int, int, in
             f"{theirs[i]:.7g} at wi = {wi[i]}, wo = {wo[i]} (tolerance {tol[i]:.3g})")
     return (int((finite & (theirs >= 0) & ~excused).sum()), int((theirs < 0).sum()),
             int((~finite).sum()))
+
+
+def counts_against_eradiate(plugin: str, table, compare_one) -> dict:
+    """{(set, variant): counts} of ``compare_one(ours, theirs, params, variant, what)`` for every
+    column of ``table`` (:func:`load_table`'s), our plugin evaluated once per parameter set,
+    finite and non-negative at every pair."""
+    _, wi, wo, sets, columns = table
+    ours = {name: plugin_values(plugin, params, wi, wo) for name, params in sets.items()}
+    for name, values in ours.items():
+        assert np.all(values >= 0) and np.all(np.isfinite(values)), (plugin, name)
+    return {(name, variant): compare_one(ours[name], theirs, sets[name], variant,
+                                         f"{plugin} {name} against Eradiate's {variant}")
+            for (name, variant), theirs in columns.items()}

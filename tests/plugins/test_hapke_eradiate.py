@@ -11,7 +11,8 @@ swapped (c weighting the forward one) fails.
 
 import numpy as np
 import pytest
-from eradiate_table import UNIT, base_tolerance, compare, load_table, plugin_values
+from eradiate_table import (UNIT, base_tolerance, compare, counts_against_eradiate,
+                            load_table, plugin_values)
 
 from mi_brdfs.reference import hapke as ref
 from mi_brdfs.scattering import hapke as scattering
@@ -68,19 +69,15 @@ def tolerance(params, wi, wo, theirs, variant):
 def test01_equal_to_eradiate(variant_llvm_ad_rgb):
     """Per parameter set, against Eradiate's float32 and float64 values, with the counts of
     :data:`COUNTS`; the plugin finite and non-negative at every pair."""
-    kind, wi, wo, sets, columns = load_table("hapke")
-    counts = {}
-    for name, params in sets.items():
-        ours = plugin_values("hapke", params, wi, wo)
-        assert np.all(ours >= 0) and np.all(np.isfinite(ours)), name
-        for (set_name, variant), theirs in columns.items():
-            if set_name == name:
-                counts[name, variant] = compare(
-                    ours, theirs, tolerance(params, wi, wo, theirs, variant), wi, wo,
-                    f"hapke {name} against Eradiate's {variant}")
-                if name == "defaults":  # NaN where g rounds to 0: backscatter and nadir
-                    assert set(kind[~np.isfinite(theirs)]) <= {"backscatter", "grid"}
-    assert counts == COUNTS
+    table = load_table("hapke")
+    kind, wi, wo, _, columns = table
+    assert counts_against_eradiate("hapke", table, lambda ours, theirs, params, variant, what:
+                                   compare(ours, theirs,
+                                           tolerance(params, wi, wo, theirs, variant),
+                                           wi, wo, what)) == COUNTS
+    for (name, _), theirs in columns.items():  # NaN where g rounds to 0: backscatter, nadir
+        if name == "defaults":
+            assert set(kind[~np.isfinite(theirs)]) <= {"backscatter", "grid"}
 
 
 def test02_swapped_lobes_fail(variant_llvm_ad_rgb, monkeypatch):

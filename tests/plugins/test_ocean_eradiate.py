@@ -17,7 +17,8 @@ import math
 
 import numpy as np
 import pytest
-from eradiate_table import base_tolerance, compare, load_table, plugin_values
+from eradiate_table import (base_tolerance, compare, counts_against_eradiate,
+                            load_table, plugin_values)
 
 from mi_brdfs.reference import ocean as ref
 from mi_brdfs.scattering import ocean as terms
@@ -79,17 +80,11 @@ def compare_ocean(ours, theirs, params, kind, wi, wo, what):
 def test01_equal_to_eradiate(variant_llvm_ad_rgb):
     """Per parameter set, against Eradiate's float32 and float64 values, with the counts of
     :data:`COUNTS`; finite and non-negative everywhere."""
-    kind, wi, wo, sets, columns = load_table("ocean")
-    counts = {}
-    for name, params in sets.items():
-        ours = plugin_values("ocean", params, wi, wo)
-        assert np.all(ours >= 0) and np.all(np.isfinite(ours)), name
-        for (set_name, variant), theirs in columns.items():
-            if set_name == name:
-                counts[name, variant] = compare_ocean(
-                    ours, theirs, params, kind, wi, wo,
-                    f"ocean {name} against Eradiate's {variant}")
-    assert counts == COUNTS
+    table = load_table("ocean")
+    kind, wi, wo, _, _ = table
+    assert counts_against_eradiate("ocean", table, lambda ours, theirs, params, variant, what:
+                                   compare_ocean(ours, theirs, params, kind, wi, wo,
+                                                 what)) == COUNTS
 
 
 def test02_a_wrong_roughness_fails(variant_llvm_ad_rgb, monkeypatch):

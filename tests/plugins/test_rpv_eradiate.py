@@ -10,7 +10,8 @@ import math
 
 import numpy as np
 import pytest
-from eradiate_table import UNIT, base_tolerance, compare, load_table, plugin_values
+from eradiate_table import (UNIT, base_tolerance, compare, counts_against_eradiate,
+                            load_table, plugin_values)
 
 from mi_brdfs.reference import rpv as ref
 from mi_brdfs.scattering import rpv as scattering
@@ -59,16 +60,12 @@ def tolerance(params, wi, wo, theirs, variant):
 def test01_equal_to_eradiate(variant_llvm_ad_rgb):
     """Per parameter set, against Eradiate's float32 and float64 values, with the counts of
     :data:`COUNTS`."""
-    _, wi, wo, sets, columns = load_table("rpv")
-    counts = {}
-    for name, params in sets.items():
-        ours = plugin_values("rpv", params, wi, wo)
-        for (set_name, variant), theirs in columns.items():
-            if set_name == name:
-                counts[name, variant] = compare(ours, theirs,
-                                                tolerance(params, wi, wo, theirs, variant),
-                                                wi, wo, f"rpv {name} against {variant}")
-    assert counts == COUNTS
+    table = load_table("rpv")
+    _, wi, wo, _, _ = table
+    assert counts_against_eradiate("rpv", table, lambda ours, theirs, params, variant, what:
+                                   compare(ours, theirs,
+                                           tolerance(params, wi, wo, theirs, variant),
+                                           wi, wo, what)) == COUNTS
 
 
 def test02_a_flipped_asymmetry_fails(variant_llvm_ad_rgb, monkeypatch):

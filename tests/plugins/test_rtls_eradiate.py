@@ -13,7 +13,8 @@ import math
 
 import numpy as np
 import pytest
-from eradiate_table import UNIT, base_tolerance, compare, load_table, plugin_values
+from eradiate_table import (UNIT, base_tolerance, compare, counts_against_eradiate,
+                            load_table, plugin_values)
 
 from mi_brdfs.reference import rtls as ref
 from mi_brdfs.scattering import rtls as kernels
@@ -65,17 +66,12 @@ def tolerance(params, wi, wo, theirs, variant):
 def test01_equal_to_eradiate(variant_llvm_ad_rgb):
     """Per parameter set, against Eradiate's float32 and float64 values, with the counts of
     :data:`COUNTS`."""
-    _, wi, wo, sets, columns = load_table("rtls")
-    counts = {}
-    for name, params in sets.items():
-        ours = plugin_values("rtls", params, wi, wo)
-        assert np.all(ours >= 0) and np.all(np.isfinite(ours)), name
-        for (set_name, variant), theirs in columns.items():
-            if set_name == name:
-                counts[name, variant] = compare(
-                    ours, theirs, tolerance(params, wi, wo, theirs, variant), wi, wo,
-                    f"rtls {name} against Eradiate's {variant}")
-    assert counts == COUNTS
+    table = load_table("rtls")
+    _, wi, wo, _, _ = table
+    assert counts_against_eradiate("rtls", table, lambda ours, theirs, params, variant, what:
+                                   compare(ours, theirs,
+                                           tolerance(params, wi, wo, theirs, variant),
+                                           wi, wo, what)) == COUNTS
 
 
 def test02_a_swapped_kernel_fails(variant_llvm_ad_rgb, monkeypatch):
