@@ -73,7 +73,7 @@ figures: $(STAMP)
 	cp $(OUT)/showcase-hq.png docs/showcase.png
 	$(VENV)/bin/mi-brdfs render earth -o $(OUT)/earth-hq.exr --spp 512 -D res=256 -D width=768 -q --force
 	cp $(OUT)/earth-hq.png docs/earth.png
-	$(PY) tools/thinfilm_figure.py --res 96 --spp 16 --check-spp 512
+	$(PY) tools/thinfilm_figure.py --res 128 --spp 48 --workers 2 --check-spp 512
 
 # The plugin reference, docs/plugins/*.md, generated from the plugins' docstrings
 docs: $(STAMP)

@@ -519,6 +519,19 @@ def test17_earth_plugins_are_fitted_within_the_ranges_they_take(variant_llvm_ad_
     assert np.isfinite(dr.grad(x)[0]), dr.grad(x)
 
 
+def test18_a_films_thickness_is_fitted(variant_llvm_ad_rgb):
+    """cooktorrance's thin film: film_thickness recovered from 280 nm to the 320 nm of a gold
+    target (a fifth of an interference period away: one basin), in relative steps (x =
+    log(1 + d)): in nanometres, 0.1 nm a step, 120 steps ended at 286 nm. Without a gradient
+    through the thickness (a table of the film's colour read at one thickness) Adam has
+    nothing to follow (drjit refuses the backward pass)."""
+    result = fit("cooktorrance material=Au alpha=0.3 film_thickness=320 film_eta=1.4",
+                 "cooktorrance material=Au alpha=0.3 film_thickness=280 film_eta=1.4",
+                 "film_thickness", starts="given", pairs=256, steps=120, thetas_deg=(0.0,))
+    assert result.parameters["film_thickness"] == pytest.approx(320.0, rel=1e-3), \
+        result.summary()
+
+
 # -------------------------------------------------------------------------------------------------
 # The variant a fit runs in, from the Python API (the caller's is handed back)
 # -------------------------------------------------------------------------------------------------

@@ -45,6 +45,9 @@ after every step to the image of the parameter's valid range (each plugin's docs
   ``mi_brdfs.plugins.hapke.PARAMETERS``), but w ≤ 1 − 10⁻⁶ (H's derivative in w is infinite
   at 1); ``ocean``'s wind speed: x = U ∈ [0, 37.54] m/s, its ``eta`` and ``ext_ior``:
   x = (η − 1)/(η + 1), η ∈ [10⁻³, 10³] (the plugin takes η > 0);
+* ``cooktorrance``'s ``film_thickness``: x = log(1 + d), d ∈ [0, 10⁵] nm (relative steps, 0, no
+  film, within reach; in nanometres a step of 0.1 would take hundreds of steps to cross a
+  fringe), its ``film_eta``: x = (η − 1)/(η + 1), η ∈ [10⁻³, 100] (the range the plugin takes);
 * any other parameter: x = v ≥ 0.
 
 A numbered parameter of ``lafortune`` (``exponent_1``, ``specular_reflectance_1``) is fitted as

@@ -98,6 +98,12 @@ def _bounds(name: str, kind: str | None = None):
         return "log", 1e-3, 10.0
     if name == "tau":
         return "log", 1e-2, 1e3
+    if name == "film_thickness":  # nm, relative steps; 0 (no film) within reach
+        from ..plugins.cooktorrance_film import THICKNESS_MAX
+        return "log1p", 0.0, THICKNESS_MAX
+    if name == "film_eta":
+        from ..plugins.cooktorrance_film import FILM_ETA_MAX
+        return "fresnel", _IOR_MIN, FILM_ETA_MAX
     if name.endswith(("reflectance", "transmittance")) or name in _KERNEL_WEIGHTS:
         return "linear", 0.0, 1.0
     return "linear", 0.0, math.inf

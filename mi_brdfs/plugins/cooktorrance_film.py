@@ -69,17 +69,21 @@ class Film:
         each side light comes from, ``sides`` = [(n1, base η, base k)] (numbers or textures),
         where everything it depends on is known at load in an RGB or mono variant: the base's
         and the film's indices constant, the thickness's range known and within the table's
-        reach, and no index differentiated (``mi.traverse`` with a gradient enabled: the table
-        holds numbers); else None (the kernel then sums the series itself).
+        reach, and neither an index nor the thickness differentiated (``mi.traverse`` with a
+        gradient enabled: the table holds numbers, and a fit that moves the thickness would
+        build one at every step); else None (the kernel then sums the series itself). A
+        thickness that is one number takes a table of that thickness alone.
         """
         rng, eta = properties.texture_range(self.thickness), properties.texture_range(self.eta)
         if self.sensitivity is None or rng is None or eta is None or eta[0] != eta[1] or \
                 self.eta.is_spatially_varying() or \
-                _differentiated([self.eta] + [v for side in sides for v in side]):
+                _differentiated([self.eta, self.thickness] + [v for side in sides
+                                                              for v in side]):
             return None
         n2 = eta[0]
         if rng[1] * n2 / thinfilm_table.OPTICAL_STEP > thinfilm_table.MAX_NODES:
             return None
+        uniform = rng[0] == rng[1] and not self.thickness.is_spatially_varying()
         tables = []
         for n1, base_eta, base_k in sides:
             base = [_channels(v, self.sensitivity.channels) for v in (base_eta, base_k)]
@@ -87,7 +91,7 @@ class Film:
                 return None
             index = tuple(complex(e, k) for e, k in zip(*base))
             tables.append(thinfilm_table.build(self.sensitivity.channels, float(n1), n2, index,
-                                               rng[1]))
+                                               rng[1], uniform))
         return thinfilm_table.ColourTable(tables, n2)
 
     def _at(self, si, active):
@@ -102,9 +106,10 @@ class Film:
         incidence cosine ``cos1`` from the medium ``n1`` (1 outside, the base's η inside, at
         most ``n1_max``) over ``eta3`` + i``k3`` (per channel, or one Float); from the
         ``side`` of :meth:`tabulate`'s ``table`` where there is one."""
-        d, n2 = self._at(si, active)
         if table is not None:
+            d = None if table.uniform else self._at(si, active)[0]
             return mi.UnpolarizedSpectrum(table(side, cos1, d))
+        d, n2 = self._at(si, active)
         return self._reflectance(si, cos1, n1, eta3, k3, d, n2, n1_max)
 
     def mean_reflectance(self, si, cos1, n1, eta3, k3, active, n1_max: float = 1.0,
@@ -112,13 +117,14 @@ class Film:
         """The mean over the channels of :meth:`reflectance` (from the table alone where
         there is one: a quarter of its reads)."""
         if table is not None:
-            return table.mean(side, cos1, self._at(si, active)[0])
+            return table.mean(side, cos1, None if table.uniform else self._at(si, active)[0])
         return dr.mean(self.reflectance(si, cos1, n1, eta3, k3, active, n1_max))
 
     def _reflectance(self, si, cos1, n1, eta3, k3, d, n2, n1_max):
         """:meth:`reflectance` computed in the kernel: exact, or the series of the colours."""
         if self.sensitivity is None:
-            rs, rp = thinfilm.amplitudes(cos1, n1, n2, eta3, k3, d, si.wavelengths)
+            rs, rp = thinfilm.amplitudes(cos1, n1, n2, eta3, k3, d, si.wavelengths,
+                                         evanescent=n1_max > self.eta_min)
             return mi.UnpolarizedSpectrum(0.5 * (thinfilm._abs2(rs) + thinfilm._abs2(rp)))
         channels = thinfilm.colour(cos1, n1, n2, eta3, k3, d, self.sensitivity,
                                    evanescent=n1_max > self.eta_min)

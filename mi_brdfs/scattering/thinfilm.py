@@ -151,16 +151,18 @@ def reflect(r12, r23, z):
     return _div(_add(r12, _mul(r23, z)), _add((1.0, 0.0), _mul(_mul(r12, r23), z)))
 
 
-def amplitudes(cos1, n1, n2, eta3, k3, thickness, wavelength):
+def amplitudes(cos1, n1, n2, eta3, k3, thickness, wavelength, evanescent: bool = True):
     """The film's complex reflection amplitudes (r_s, r_p) at ``wavelength`` (nm, per
-    channel; ``thickness`` in nm), exact: spectral variants."""
+    channel; ``thickness`` in nm), exact: spectral variants. ``evanescent``: whether n₁ sinθ₁
+    may exceed n₂ (else q₂ is real, and the decay, 1, is left out of the kernel)."""
     s, p, q2 = interfaces(cos1, n1, n2, eta3, k3)
     # z = exp(2πi·2d·q₂/λ): its modulus decays where q₂ is imaginary (evanescent)
     # (a wavelength of 0, which an interaction Mitsuba did not sample carries, kept finite)
     x = 4.0 * dr.pi * thickness / dr.maximum(wavelength, 1.0)
     z = _expi(x * q2[0])
-    decay = dr.exp(-x * q2[1])
-    z = (z[0] * decay, z[1] * decay)
+    if evanescent:
+        decay = dr.exp(-x * q2[1])
+        z = (z[0] * decay, z[1] * decay)
     return reflect(*s, z), reflect(*p, z)
 
 
