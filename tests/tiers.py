@@ -88,7 +88,7 @@ SLOW = {
             "cooktorrance-0.3-smith-ggx-0.6",
             "cooktorrance-True-0.5-Au", "cooktorrance-True-0.5", "cooktorrance-True-True-0.45",
             "orennayar-full", "ashikhmin-10.0-200.0", "ward-0.1-0.3",
-            "lafortune-20.0-1.0-1.0-1.0"]),
+            "lafortune-20.0-1.0-1.0-1.0", "hk-all-1.3-0.4-0.6-1.5"]),
         "test03_the_compensated_glass_carries_eta_into_its_tables": DEEP,
     },
     "tests/cli/test_cli.py": {
@@ -326,6 +326,11 @@ SLOW = {
     "tests/plugins/test_hk.py": {
         "test04_sampler_matches_its_pdf_under_glass": DEEP,
     },
+    # the quick tier keeps the layer under glass of g = 0.6 (its tables built once) and the
+    # isotropic one
+    "tests/plugins/test_hk_all.py": {
+        "test01_bands_equal_the_random_walk": (MORE, ["1"]),
+    },
     "tests/plugins/test_ocean.py": {
         "test06_finite_and_non_negative_at_the_singular_places": (MORE, ["llvm_ad_rgb"]),
         "test09_polarized_variants": (MORE, ["llvm_ad_spectral_polarized"]),
@@ -493,6 +498,9 @@ SLOW = {
             "s0.5-t2.0-westin", "s0.5-t2.0-holzschuch", "s1.0-t4.0-westin",
             "s1.0-t4.0-holzschuch"]),
         "test02_the_paper_reading_and_where_its_window_stops": DEEP,
+    },
+    "tests/scattering/test_hk_orders.py": {
+        "test01_tables_within_their_promise": (MORE, ["3"]),
     },
     "tests/scattering/test_lafortune_lobes.py": {
         "test02_sampler_matches_its_density": (MORE, ["78deg", "87deg"]),

@@ -1,7 +1,7 @@
 """
 Hanrahan & Krueger's layer in ``make bench``: the render cost of ``hk`` against
 ``cooktorrance`` on the same scene (every sphere of the showcase), index-matched, under glass
-and over a Lambertian base.
+and over a Lambertian base, the single model and every order.
 """
 
 from __future__ import annotations
@@ -17,6 +17,10 @@ CONFIGS = [
     ("under glass (η = 1.5)", "hk sigma_s=1 sigma_a=0.1 thickness=0.5 g=0.6 eta=1.5"),
     ("over a base (η = 1.33, ρ = 0.5)",
      "hk sigma_s=1 sigma_a=0.1 thickness=0.5 g=0.6 eta=1.33 diffuse_reflectance=0.5"),
+    ("under glass, every order", "hk sigma_s=1 sigma_a=0.1 thickness=0.5 g=0.6 eta=1.5 "
+     "scattering=all"),
+    ("over a base, every order", "hk sigma_s=1 sigma_a=0.1 thickness=0.5 g=0.6 eta=1.33 "
+     "diffuse_reflectance=0.5 scattering=all"),
 ]
 #: The target: hk's render time at most this many times cooktorrance's.
 TARGET_COST = 1.5

@@ -82,3 +82,15 @@ def unscattered(wi, tau, eta: float):
     """The beam straight through the slab, T² e^{−τ/μi'} (a spectrum)."""
     mu, t, _ = inside(wi, eta)
     return t * t * dr.exp(-tau / mu)
+
+
+def unscattered_all(wi, tau, eta: float):
+    """The unscattered beams of every internal reflection where η > 1: (through the slab
+    along −ωi, T² t/(1 − F² t²); back along the mirror, T² F t²/(1 − F² t²)), t = e^{−τ/μi'}
+    the slab's transmittance and F the faces' reflectance at the beam's angle, the same
+    inside and out (Stokes's relations): geometric series of the beam's round trips."""
+    mu, t, _ = inside(wi, eta)
+    f = 1.0 - t
+    through = dr.exp(-tau / mu)
+    rest = dr.rcp(1.0 - f * f * through * through)
+    return t * t * through * rest, t * t * f * through * through * rest

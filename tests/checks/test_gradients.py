@@ -44,6 +44,8 @@ PLUGINS = [spec_of(name) for name in registry.PLUGINS] + [
     {"type": "ashikhmin", "nu": 10.0, "nv": 200.0},
     {"type": "ward", "alpha_u": 0.1, "alpha_v": 0.3},
     {"type": "lafortune", "exponent_0": 20.0, "cx_1": 1.0, "cy_1": 1.0, "cz_1": 1.0},
+    # every order: through the tables' interpolation in albedo and optical depth
+    {"type": "hk", "scattering": "all", "sigma_s": 1.3, "sigma_a": 0.4, "g": 0.6, "eta": 1.5},
 ]
 
 

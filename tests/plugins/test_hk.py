@@ -3,8 +3,8 @@ The ``hk`` plugin (Hanrahan & Krueger 1993's layer): eval against the float64 re
 random pairs over the sphere (index-matched, under an interface, from below, over a base, per
 channel) in scalar_rgb; its components (scattered, the unscattered beam as a null
 interaction, the mirror where η ≠ 1) and their sample weights against the closed forms;
-one-line errors, ``scattering = all`` refused. The battery (χ², reciprocity, energy) runs in
-``mi-brdfs check hk``; the slow tier runs it on a forward-scattering layer under glass.
+one-line errors (``scattering = all``: tests/plugins/test_hk_all.py). The battery (χ²,
+reciprocity, energy) runs in ``mi-brdfs check hk``; the slow tier runs it on a forward-scattering layer under glass.
 """
 
 import drjit as dr
@@ -72,7 +72,6 @@ def test02_components_and_delta_weights(variant_scalar_rgb):
 
 
 @pytest.mark.parametrize("spec,message", [
-    ({"scattering": "all"}, 'hk: parameter "scattering" = "all" is invalid: must be "single"'),
     ({"scattering": "double"}, 'parameter "scattering" = "double" is invalid: must be one of'),
     ({"g": 1.0}, 'hk: parameter "g" = 1 is invalid'),
     ({"eta": 0.8}, 'hk: parameter "eta" = 0.8 is invalid'),
