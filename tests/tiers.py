@@ -500,7 +500,8 @@ SLOW = {
         "test02_the_paper_reading_and_where_its_window_stops": DEEP,
     },
     "tests/scattering/test_hk_orders.py": {
-        "test01_tables_within_their_promise": (MORE, ["3"]),
+        "test01_tables_within_their_promise": (MORE, ["grid-3", "constant-3", "constant-0",
+                                                      "constant-2"]),
     },
     "tests/scattering/test_lafortune_lobes.py": {
         "test02_sampler_matches_its_density": (MORE, ["78deg", "87deg"]),

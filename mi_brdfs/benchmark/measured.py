@@ -40,11 +40,14 @@ COSINE = "mi_brdfs_bench_cosine"
 
 def _register_cosine() -> None:
     """Register :data:`COSINE` in the current variant: a Python BSDF that evaluates its nested
-    ``bsdf`` and samples ωo from the cosine-weighted hemisphere, pdf cosθo/π."""
+    ``bsdf`` and samples ωo from the cosine-weighted hemisphere, pdf cosθo/π; with
+    ``two_sided``, from either hemisphere with probability 1/2 each, pdf |cosθo|/(2π) (a BSDF
+    that transmits)."""
     class Cosine(mi.BSDF):
         def __init__(self, props):
             super().__init__(props)
             self.inner = props["bsdf"]
+            self.two_sided = props.get("two_sided", False)
             self.m_flags = int(self.inner.flags())
             self.m_components = [int(self.inner.flags(0))]
 
@@ -52,6 +55,10 @@ def _register_cosine() -> None:
             return self.inner.eval(ctx, si, wo, active)
 
         def pdf(self, ctx, si, wo, active=True):
+            if self.two_sided:
+                w = mi.Vector3f(wo.x, wo.y, dr.abs(wo.z))
+                ok = active & (si.wi.z > 0) & (wo.z != 0)
+                return dr.select(ok, 0.5 * mi.warp.square_to_cosine_hemisphere_pdf(w), 0.0)
             ok = active & (si.wi.z > 0) & (wo.z > 0)
             return dr.select(ok, mi.warp.square_to_cosine_hemisphere_pdf(wo), 0.0)
 
@@ -61,6 +68,8 @@ def _register_cosine() -> None:
         def sample(self, ctx, si, sample1, sample2, active=True):
             bs = dr.zeros(mi.BSDFSample3f)
             bs.wo = mi.warp.square_to_cosine_hemisphere(sample2)
+            if self.two_sided:
+                bs.wo.z = dr.select(sample1 < 0.5, bs.wo.z, -bs.wo.z)
             bs.pdf = self.pdf(ctx, si, bs.wo, active)
             bs.eta, bs.sampled_component = 1.0, 0
             bs.sampled_type = mi.UInt32(int(mi.BSDFFlags.GlossyReflection))
@@ -71,18 +80,20 @@ def _register_cosine() -> None:
     mi.register_bsdf(COSINE, Cosine)
 
 
-def cosine_sampled(bsdf) -> mi.BSDF:
-    """``bsdf`` (loaded) sampled by the cosine-weighted hemisphere."""
+def cosine_sampled(bsdf, two_sided: bool = False) -> mi.BSDF:
+    """``bsdf`` (loaded) sampled by the cosine-weighted hemisphere (of either side with
+    ``two_sided``)."""
     _register_cosine()
-    return mi.load_dict({"type": COSINE, "bsdf": bsdf})
+    return mi.load_dict({"type": COSINE, "bsdf": bsdf, "two_sided": two_sided})
 
 
-def time_ratio(ctx: Context, scene: str, bsdf) -> tuple:
-    """(time to 1 % with the BSDF's own sampler, with the cosine's, their ratio) in
-    ``scene``."""
+def time_ratio(ctx: Context, scene: str, bsdf, two_sided: bool = False) -> tuple:
+    """(time to 1 % with the BSDF's own sampler, with the cosine's (of either side with
+    ``two_sided``), their ratio) in ``scene``."""
     spps = [2 ** k for k in range(ctx.n(6, 2))]
     reference_spp = 16 * spps[-1]
-    rows, _ = error_time.measure(scene, {"own": bsdf, "cosine": cosine_sampled(bsdf)},
+    rows, _ = error_time.measure(scene, {"own": bsdf,
+                                         "cosine": cosine_sampled(bsdf, two_sided)},
                                  spps, ctx.n(96, 16), ctx.n(7, 2), reference_spp)
     times = {k: error_time.time_to(rows, k, reference_spp) for k in ("own", "cosine")}
     return times["own"], times["cosine"], times["cosine"] / times["own"]

@@ -77,7 +77,7 @@ class Film:
         rng, eta = properties.texture_range(self.thickness), properties.texture_range(self.eta)
         if self.sensitivity is None or rng is None or eta is None or eta[0] != eta[1] or \
                 self.eta.is_spatially_varying() or \
-                _differentiated([self.eta, self.thickness] + [v for side in sides
+                properties.differentiated([self.eta, self.thickness] + [v for side in sides
                                                               for v in side]):
             return None
         n2 = eta[0]
@@ -174,12 +174,3 @@ def _channels(value, channels: int):
         return None
     v = np.array(value.eval(dr.zeros(mi.SurfaceInteraction3f)), np.float64).ravel()
     return [float(x) for x in (v if v.size == channels else np.repeat(v[:1], channels))]
-
-
-def _differentiated(values) -> bool:
-    """Whether any of the numbers or textures (evaluated once) carries a gradient."""
-    if not dr.is_diff_v(mi.Float):
-        return False
-    si = dr.zeros(mi.SurfaceInteraction3f)
-    return any(dr.grad_enabled(v.eval(si) if isinstance(v, mi.Texture) else v)
-               for v in values if not isinstance(v, (int, float)))

@@ -389,6 +389,16 @@ def reject(props, plugin: str, name: str, hint: str) -> None:
         raise ParameterError(plugin, name, props[name], hint)
 
 
+def differentiated(values) -> bool:
+    """Whether any of the numbers or textures (evaluated once) carries a gradient (a table
+    built from them would hold numbers without one)."""
+    if not dr.is_diff_v(mi.Float):
+        return False
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    return any(dr.grad_enabled(v.eval(si) if isinstance(v, mi.Texture) else v)
+               for v in values if not isinstance(v, (int, float)))
+
+
 def is_zero(tex) -> bool:
     """Whether a texture is the constant 0 (so the lobe it scales can be left out entirely)."""
     rng = texture_range(tex)

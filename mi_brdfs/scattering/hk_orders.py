@@ -14,16 +14,22 @@ semi-infinite to the table's accuracy); the external cosines at the midpoints of
 independent) until one falls below :data:`MODE_TOLERANCE` of mode 0's peak (an isotropic
 phase function needs one: the higher orders do not depend on the azimuth).
 
-What is interpolated: mode 0 (positive: a sum of paths) linearly in the cosines, then its
-logarithm linearly in τ — exact for the exponential attenuation of a thick slab, where a
-linear interpolation of the value erred by up to 5 % of the largest transmission, while a
-logarithm across the cosines erred by 7 % at grazing incidence, where f falls as T(μ) ∝ μ; the
-Fresnel transmittances of both crossings, T(μi) T(μo), are divided out of the tables and
-multiplied back exactly (T ∝ μ at grazing incidence under an interface: linear interpolation
-of f itself erred by 5 % of the peak between the first two cosine nodes); the
-other modes as ratios to mode 0 (|c_m f_m| ≤ 2 f_0 for a non-negative f); linearly in w
-between albedo nodes.
+What is interpolated, at each of the four cosine nodes around (μi, μo): mode 0 (positive: a
+sum of paths) by its logarithm, linearly in τ — exact for the exponential attenuation of a
+thick slab, where a linear interpolation of the value erred by up to 5 % of the largest
+transmission — then geometrically in w (linearly from a = 0, where it is 0), and the other
+modes as ratios to mode 0 (|c_m f_m| ≤ 2 f_0 for a non-negative f) linearly in τ and w; then
+both bilinearly in the cosines (a logarithm across the cosines erred by 7 % at grazing
+incidence, where f falls as T(μ) ∝ μ). The Fresnel transmittances of both crossings,
+T(μi) T(μo), are divided out of the tables and multiplied back exactly (linear interpolation
+of f itself erred by 5 % of the peak between the first two cosine nodes under an interface).
 Below τ₀ the higher orders scale as τ/τ₀ (one scattering with internal reflections).
+
+A medium that is one spectrum over the whole surface and carries no gradient (the usual case)
+has its (a, τ) interpolation done once, on the host, at load (:meth:`Orders.fix`, the same
+formulas in float64: the kernel then reads and interpolates the cosines alone); a textured
+medium, or one being differentiated, interpolates in the kernel. Both are one function of
+(a, τ), so a derivative by AD (the kernel's) matches finite differences of either.
 
 A Lambertian base of reflectance ρ adds ρ E(μi) U(μo)/(1 − ρ S) (light reaching the base,
 leaving the top from it, returning to it: the interreflection between the base and the layer
@@ -90,8 +96,15 @@ def grid(g: float, eta: float, base: bool) -> dict:
         _, more = chunk(higher[0].shape[2], CHUNK)
         higher = [np.concatenate([h, more(t) - more(s)], axis=2)
                   for h, (t, s) in zip(higher, pairs)]
-    out = {"tau": np.concatenate([[0.0], chains[0].tau[1:], chains[1].tau[1:]])}
-    out["tau"].sort()
+    out = {"tau": np.sort(np.concatenate([[0.0], chains[0].tau[1:], chains[1].tau[1:]])),
+           **_store(higher, merge, tr, base)}
+    return out
+
+
+def _store(higher, merge, tr, base: bool) -> dict:
+    """The tables as the kernel reads them, (a, τ, μi, μo[, m]): ``q``, ``r``, ``qt``,
+    ``rt``, and over a base ``E``, ``U``, ``E0``, ``U0``, ``S`` (see :func:`grid`)."""
+    out = {}
     for (q, r), h in zip((("q", "r"), ("qt", "rt")), higher):
         f0 = h[:, :, 0]
         out[q] = np.maximum(f0 / np.multiply.outer(tr, tr), FLOOR)
@@ -101,6 +114,52 @@ def grid(g: float, eta: float, base: bool) -> dict:
         for name in ("E", "U", "E0", "U0"):
             out[name] = np.maximum(merge(name) / tr, FLOOR)
         out["S"] = merge("S")
+    return out
+
+
+def cell(albedo: float, tau: float, n_tau: int) -> tuple:
+    """(albedo node, its fraction in w, τ node (τ = 0 counted), its fraction linear in τ) in
+    float64: :meth:`Orders._cell`'s formulas."""
+    w = (1.0 - np.cbrt(1.0 - min(max(albedo, 0.0), 1.0))) * (N_ALBEDO - 1)
+    ia = min(int(w), N_ALBEDO - 2)
+    t = min(max(tau, 0.0), TAU_MIN * 2.0 ** (0.5 * (n_tau - 2)))
+    x = t / TAU_MIN if t < TAU_MIN else 1.0 + 2.0 * math.log2(t / TAU_MIN)
+    it = min(int(min(max(x, 0.0), n_tau - 1.0)), n_tau - 2)
+    lo = 0.0 if it == 0 else TAU_MIN * 2.0 ** (0.5 * (it - 1))
+    hi = TAU_MIN * 2.0 ** (0.5 * it)
+    return ia, w - ia, it, min(max((t - lo) / (hi - lo), 0.0), 1.0)
+
+
+def _lerp(a, b, t):
+    return a + (b - a) * t
+
+
+def at_medium(t: dict, albedo: float, tau: float, base: bool) -> dict:
+    """The grid ``t`` interpolated in (a, τ) at one medium, in float64, by the kernel's
+    formulas (:meth:`Orders._corner`, :meth:`Orders._vector`, :meth:`Orders._scalar`):
+    ``q`` f_0 (times τ/τ₀ below τ₀) and ``r`` the ratios per side and pair of cosine nodes;
+    over a base ``E``, ``U``, ``E0``, ``U0`` per cosine node and ``S``."""
+    n_tau = len(t["tau"])
+    ia, fa, it, ft = cell(albedo, tau, n_tau)
+    lo, fth = max(it, 1), (0.0 if it == 0 else ft)
+    out = {}
+    for q, r in (("q", "r"), ("qt", "rt")):
+        if q not in t:
+            continue
+        logs = [_lerp(np.log(t[q][ia + d, lo]), np.log(t[q][ia + d, lo + 1]), fth)
+                for d in (0, 1)]
+        f0 = _lerp(np.exp(logs[0]), np.exp(logs[1]), fa) if ia == 0 else \
+            np.exp(_lerp(logs[0], logs[1], fa))
+        ratios = [_lerp(t[r][ia + d, lo], t[r][ia + d, lo + 1], fth) for d in (0, 1)]
+        out[q] = f0 * min(tau / TAU_MIN, 1.0)
+        out[r] = _lerp(ratios[0], ratios[1], fa)
+    if base:
+        for name in ("E", "U", "E0", "U0"):
+            out[name] = sum(wa * np.exp(_lerp(np.log(t[name][ia + d, it]),
+                                              np.log(t[name][ia + d, it + 1]), ft))
+                            for d, wa in ((0, 1.0 - fa), (1, fa)))
+        rows = [_lerp(t["S"][ia + d, it], t["S"][ia + d, it + 1], ft) for d in (0, 1)]
+        out["S"] = _lerp(rows[0], rows[1], fa)
     return out
 
 
@@ -125,19 +184,61 @@ def _read(table, index):
     return float(table[int(index)])
 
 
+def _read4(table, index, count: int) -> list:
+    """The ``count`` (a multiple of 4) numbers from ``index``·count on: packets of four
+    adjacent numbers (one gather each in JIT variants)."""
+    if dr.is_jit_v(mi.Float):
+        out = []
+        for k in range(count // 4):
+            v = dr.gather(mi.Vector4f, table, index * (count // 4) + k)
+            out += [v.x, v.y, v.z, v.w]
+        return out
+    start = int(index) * count
+    return [float(x) for x in table[start:start + count]]
+
+
+def _pack(t: dict, base: bool, modes: int) -> dict:
+    """The tables in the current variant: per node f_0 and the ratios side by side, padded to
+    packets of four, transmission's (no base) after reflection's: one lookup, either side."""
+    stride = 4 * math.ceil(modes / 4)
+    sides = [("q", "r")] + ([] if base else [("qt", "rt")])
+    node = np.zeros((len(sides),) + t["q"].shape + (stride,))
+    for k, (q, r) in enumerate(sides):
+        node[k, ..., 0], node[k, ..., 1:modes] = t[q], t[r][..., :modes - 1]
+    out = {k: _array(v) for k, v in t.items() if k not in ("tau", "q", "r", "qt", "rt")}
+    out["node"] = _array(node)
+    return out
+
+
 class Orders:
-    """The higher orders of one layer in the current variant: :meth:`value` per channel."""
+    """The higher orders of one layer in the current variant: :meth:`value` per channel,
+    interpolated in (albedo, depth) in the kernel, or once on the host for a medium that
+    :meth:`fix` has been given."""
 
     def __init__(self, g: float, eta: float, base: bool):
-        t = grid(float(g), float(eta), bool(base))
-        self.eta = float(eta)
-        self.base, self.n_tau, self.tau_max = base, len(t["tau"]), float(t["tau"][-1])
-        self.modes = t["r"].shape[-1] + 1
-        self.tables = {k: _array(v) for k, v in t.items() if k != "tau"}
+        self.grid = grid(float(g), float(eta), bool(base))
+        self.eta, self.base = float(eta), bool(base)
+        self.n_tau = len(self.grid["tau"])
+        self.tau_max = float(self.grid["tau"][-1])
+        self.modes = self.grid["r"].shape[-1] + 1
+        self.stride = 4 * math.ceil(self.modes / 4)
+        self.tables, self.fixed = _pack(self.grid, base, self.modes), None
+
+    def fix(self, channels) -> None:
+        """Interpolate the grid once, on the host, at each channel's (albedo, depth):
+        ``channels`` a list of pairs; None: in the kernel again."""
+        if channels is None:
+            self.fixed = None
+            return
+        pairs = sorted(set(channels))
+        media = [at_medium(self.grid, a, t, self.base) for a, t in pairs]
+        t = {k: np.stack([m[k] for m in media])[:, None] for k in media[0]}
+        self.fixed = (_pack(t, self.base, self.modes), len(pairs),
+                      [pairs.index(c) for c in channels])
 
     def _cell(self, albedo, tau):
         """(albedo node, its fraction in w; τ node (τ = 0 counted), its fraction linear in
-        τ) of one channel."""
+        τ) of one channel (float64 on the host: :func:`cell`)."""
         w = (1.0 - dr.cbrt(1.0 - dr.clip(albedo, 0.0, 1.0))) * (N_ALBEDO - 1)
         ia = dr.minimum(mi.UInt32(w), N_ALBEDO - 2)
         t = dr.clip(tau, 0.0, self.tau_max)
@@ -154,52 +255,37 @@ class Orders:
         i = dr.minimum(mi.UInt32(x), N_MU - 2)
         return i, x - mi.Float(i)
 
-    def _bilinear(self, name, node, i, fi, o, fo, count=1, slot=0):
-        """Bilinear in (μi, μo) of entry ``slot`` of ``count`` per node of table ``name``."""
-        t = self.tables[name]
-
-        def at(di, do):
-            return _read(t, ((node * N_MU + i + di) * N_MU + o + do) * count + slot)
-
-        return dr.lerp(dr.lerp(at(0, 0), at(0, 1), fo), dr.lerp(at(1, 0), at(1, 1), fo), fi)
-
-    def _series(self, names, cell, mu_i, mu_o, cos_m):
-        """The higher orders' f at one channel: f_0 (1 + Σ ratio_m cos(mΔφ)), interpolated
-        at each albedo node in the cosines, then in τ (f_0's logarithm), then in albedo."""
+    def _corner(self, side, cell, i, o) -> list:
+        """f_0 and the ratios at the cosine nodes (i, o), interpolated in (a, τ) (the
+        formulas of :func:`at_medium`)."""
         ia, fa, it, ft = cell
-        q, r = names
-        (i, fi), (o, fo) = self._mu(mu_i), self._mu(mu_o)
-        lo = dr.maximum(it, 1)
-        ft = dr.select(it == 0, 0.0, ft)
-        logs, shapes = [], []
+        lo, ft = dr.maximum(it, 1), dr.select(it == 0, 0.0, ft)
+        per_a = []
         for da in (0, 1):
-            nodes = [(ia + da) * self.n_tau + lo + dt for dt in (0, 1)]
-            logs.append(dr.lerp(*(dr.log(self._bilinear(q, n, i, fi, o, fo)) for n in nodes),
-                                ft))
-            shape = 1.0
-            for m in range(1, self.modes):
-                ratio = dr.lerp(*(self._bilinear(r, n, i, fi, o, fo, self.modes - 1, m - 1)
-                                  for n in nodes), ft)
-                shape = shape + ratio * cos_m[m]
-            shapes.append(shape)
-        # geometric in albedo (a thick slab's transmission falls exponentially with the
-        # diffusion length), linear from a = 0 (f_0 = 0 there) to the first node
-        f0 = dr.select(ia == 0, dr.lerp(dr.exp(logs[0]), dr.exp(logs[1]), fa),
-                       dr.exp(dr.lerp(logs[0], logs[1], fa)))
-        return f0 * dr.lerp(shapes[0], shapes[1], fa)
+            near, far = (_read4(self.tables["node"], (((ia + side * N_ALBEDO + da) * self.n_tau
+                                                       + lo + dt) * N_MU + i) * N_MU + o,
+                                self.stride) for dt in (0, 1))
+            per_a.append([dr.lerp(dr.log(near[0]), dr.log(far[0]), ft)] +
+                         [dr.lerp(near[m], far[m], ft) for m in range(1, self.modes)])
+        (l0, *r0), (l1, *r1) = per_a
+        f0 = dr.select(ia == 0, dr.lerp(dr.exp(l0), dr.exp(l1), fa),
+                       dr.exp(dr.lerp(l0, l1, fa)))
+        return [f0] + [dr.lerp(a, b, fa) for a, b in zip(r0, r1)]
 
     def _vector(self, name, cell, mu):
-        """A base's vector at ``mu``: linear in μ, its logarithm linear in τ, linear in w."""
+        """A base's vector at ``mu``: at each cosine node its logarithm linear in τ, the
+        value linear in w; then linear in μ."""
         ia, fa, it, ft = cell
         i, f = self._mu(mu)
-        total = 0.0
-        for da, wa in ((0, 1.0 - fa), (1, fa)):
-            node = (ia + da) * self.n_tau + it
-            t = self.tables[name]
-            at = [dr.lerp(_read(t, n * N_MU + i), _read(t, n * N_MU + i + 1), f)
-                  for n in (node, node + 1)]
-            total = total + wa * dr.exp(dr.lerp(dr.log(at[0]), dr.log(at[1]), ft))
-        return total
+        t = self.tables[name]
+
+        def node(k):
+            return sum(wa * dr.exp(dr.lerp(dr.log(_read(t, n * N_MU + k)),
+                                           dr.log(_read(t, (n + 1) * N_MU + k)), ft))
+                       for n, wa in (((ia) * self.n_tau + it, 1.0 - fa),
+                                     ((ia + 1) * self.n_tau + it, fa)))
+
+        return dr.lerp(node(i), node(i + 1), f)
 
     def _scalar(self, name, cell):
         ia, fa, it, ft = cell
@@ -208,9 +294,42 @@ class Orders:
                 for n in (ia * self.n_tau + it, (ia + 1) * self.n_tau + it)]
         return dr.lerp(rows[0], rows[1], fa)
 
+    def _medium(self, side, c: int, albedo, tau, mu_i, mu_o):
+        """Channel ``c``'s lookups: (f_0 and the ratios, bilinear in the cosines, and over a
+        base (E(μi) U(μo), S, E₀(μi) U₀(μo))), from the grid or the fixed medium."""
+        (i, fi), (o, fo) = self._mu(mu_i), self._mu(mu_o)
+        if self.fixed is None:
+            cell = self._cell(albedo, tau)
+            corners = [self._corner(side, cell, i + di, o + do) for di in (0, 1)
+                       for do in (0, 1)]
+            small = dr.minimum(tau / TAU_MIN, 1.0)  # below τ₀ the higher orders scale as τ
+            base = None if not self.base else (
+                self._vector("E", cell, mu_i) * self._vector("U", cell, mu_o),
+                self._scalar("S", cell),
+                self._vector("E0", cell, mu_i) * self._vector("U0", cell, mu_o))
+        else:
+            tables, count, index = self.fixed
+            p = index[c]
+            corners = [_read4(tables["node"], ((side * count + p) * N_MU + i + di) * N_MU
+                              + o + do, self.stride)[:self.modes]
+                       for di in (0, 1) for do in (0, 1)]
+            small = 1.0
+
+            def vector(name, k, w):
+                return dr.lerp(_read(tables[name], p * N_MU + k),
+                               _read(tables[name], p * N_MU + k + 1), w)
+
+            base = None if not self.base else (
+                vector("E", i, fi) * vector("U", o, fo), _read(tables["S"], p),
+                vector("E0", i, fi) * vector("U0", o, fo))
+        v = [dr.lerp(dr.lerp(corners[0][k], corners[1][k], fo),
+                     dr.lerp(corners[2][k], corners[3][k], fo), fi) for k in range(self.modes)]
+        return v, small, base
+
     def value(self, wi, wo, albedo, tau, rho):
         """f (no cosine) of the higher orders, ωi above the surface; ``albedo``, ``tau``,
-        ``rho``: spectra."""
+        ``rho``: spectra (channels of equal values are read once: drjit merges equal
+        computations)."""
         mu_i, mu_o = dr.abs(wi.z), dr.abs(wo.z)
         sin2 = (1.0 - mu_i * mu_i) * (1.0 - mu_o * mu_o)
         cos_phi = dr.select(sin2 > 1e-12, (wi.x * wo.x + wi.y * wo.y)
@@ -221,18 +340,13 @@ class Orders:
         above = wo.z > 0
         t_i = 1.0 - fresnel.dielectric(mu_i, self.eta)[0] if self.eta != 1.0 else 1.0
         t_o = 1.0 - fresnel.dielectric(mu_o, self.eta)[0] if self.eta != 1.0 else 1.0
+        side = 0 if self.base else dr.select(above, mi.UInt32(0), mi.UInt32(1))
         out = dr.zeros(mi.UnpolarizedSpectrum, dr.width(mu_i))
         for c in range(dr.size_v(mi.UnpolarizedSpectrum)):
-            cell = self._cell(albedo[c], tau[c])
-            small = dr.minimum(tau[c] / TAU_MIN, 1.0)  # below τ₀: ∝ τ
-            f = self._series(("q", "r"), cell, mu_i, mu_o, cos_m) * small * t_i * t_o
-            if self.base:
-                r = rho[c]
-                e, u = self._vector("E", cell, mu_i), self._vector("U", cell, mu_o)
-                e0, u0 = self._vector("E0", cell, mu_i), self._vector("U0", cell, mu_o)
-                f = f + r * t_i * t_o * (e * u / (1.0 - r * self._scalar("S", cell)) - e0 * u0)
-                out[c] = dr.select(above, f, 0.0)
-            else:
-                ft = self._series(("qt", "rt"), cell, mu_i, mu_o, cos_m) * small * t_i * t_o
-                out[c] = dr.select(above, f, ft)
+            v, small, base = self._medium(side, c, albedo[c], tau[c], mu_i, mu_o)
+            f = v[0] * (1.0 + sum(v[m] * cos_m[m] for m in range(1, self.modes))) * small
+            if base is not None:  # the base's series, less its direct part
+                eu, s, direct = base
+                f = dr.select(above, f + rho[c] * (eu / (1.0 - rho[c] * s) - direct), 0.0)
+            out[c] = f * t_i * t_o
         return out

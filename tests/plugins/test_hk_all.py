@@ -106,3 +106,22 @@ def test03_white_furnace_of_a_conservative_slab(variant_llvm_ad_rgb):
         mean, err = s.weight[:, 0].mean(), s.weight[:, 0].std() / np.sqrt(n)
         assert abs(mean - 1.0) <= 4 * err + PROMISE, (wi, mean, err)
         dr.eval()
+
+
+@pytest.mark.parametrize("base", [False, True])
+def test04_each_channel_is_its_own_grey_layer(variant_llvm_ad_rgb, base):
+    """σs, σa (and ρ) of three different channels: each channel of f·cosθo equals that of the
+    layer made of its own values alone (uniform, read once for all channels)."""
+    rgb = {"sigma_s": [0.4, 1.5, 3.0], "sigma_a": [0.3, 0.1, 0.02]}
+    layer = {"g": 0.6, "eta": 1.5, "scattering": "all"}
+    if base:
+        layer = {"g": 0.3, "eta": 1.33, "scattering": "all"}
+        rgb["diffuse_reflectance"] = [0.2, 0.6, 0.9]
+    rng = np.random.default_rng(2)
+    wi, wo = batch.random_directions(rng, 500, False), batch.random_directions(rng, 500)
+    value = batch.evaluate({"type": "hk", **layer, **{k: {"type": "rgb", "value": v}
+                                                      for k, v in rgb.items()}}, wi, wo).value
+    for c in range(3):
+        grey = batch.evaluate({"type": "hk", **layer, **{k: v[c] for k, v in rgb.items()}},
+                              wi, wo).value[:, 0]
+        np.testing.assert_allclose(value[:, c], grey, rtol=1e-5, atol=1e-7)

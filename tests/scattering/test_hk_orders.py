@@ -46,8 +46,18 @@ def _exact(g, eta, rho, a, tau, wi, wo, dphi, i, o, mu):
     return params, out
 
 
+def _textured(params: dict) -> dict:
+    """The same medium as a texture that may vary over the surface (a checkerboard of one
+    value): the plugin reads the grid, interpolating in albedo and depth."""
+    return {**params, **{k: {"type": "checkerboard", "color0": params[k], "color1": params[k]}
+                         for k in ("sigma_s", "sigma_a")}}
+
+
 @pytest.mark.parametrize("slab", range(len(SLABS)))
-def test01_tables_within_their_promise(variant_llvm_ad_rgb, slab):
+@pytest.mark.parametrize("medium", ["grid", "constant"])
+def test01_tables_within_their_promise(variant_llvm_ad_rgb, slab, medium):
+    """The grid (a textured medium) and the tables at a constant medium's own (albedo,
+    depth) (only the cosines interpolated) within the promise."""
     g, eta, rho, a, tau = SLABS[slab]
     mu = (np.arange(K) + 0.5) / K  # between the tables' cosine nodes
     i, o = (x.ravel() for x in np.meshgrid(np.arange(K), np.arange(K), indexing="ij"))
@@ -56,7 +66,8 @@ def test01_tables_within_their_promise(variant_llvm_ad_rgb, slab):
     wi = np.stack([s_i, 0 * s_i, mu[i]], axis=1)
     wo = np.stack([s_o * np.cos(dphi), s_o * np.sin(dphi), mu[o]], axis=1)
     params, exact = _exact(g, eta, rho, a, tau, wi, wo, dphi, i, o, mu)
-    bsdf = mi.load_dict({"type": "hk", "scattering": "all", **params})
+    bsdf = mi.load_dict({"type": "hk", "scattering": "all",
+                         **(_textured(params) if medium == "grid" else params)})
     for side, want in zip((1.0, -1.0), exact):
         si = batch.interaction(wi[0], len(wi))
         si.wi = mi.Vector3f(*(batch.floats(x) for x in wi.T))
@@ -67,3 +78,19 @@ def test01_tables_within_their_promise(variant_llvm_ad_rgb, slab):
         assert np.max(np.abs(got - want) / peak) <= PROMISE, (side, np.max(np.abs(got - want)
                                                                              / peak))
         assert np.median(np.abs(got - want) / want) <= PROMISE, side
+
+
+@pytest.mark.parametrize("slab", [0, 3])
+def test02_a_constant_medium_is_the_grid_interpolated_once(variant_llvm_ad_rgb, slab):
+    """The host's interpolation of a constant medium (float64) and the kernel's of a
+    textured one are one function: equal to float32 rounding (so that a derivative by AD, the
+    kernel's, matches finite differences of either)."""
+    g, eta, rho, a, tau = SLABS[slab]
+    params = {"sigma_s": a * tau, "sigma_a": (1 - a) * tau, "g": g, "eta": eta,
+              "scattering": "all", **({} if rho is None else {"diffuse_reflectance": rho})}
+    rng = np.random.default_rng(4)
+    wi, wo = batch.random_directions(rng, 2000, False), batch.random_directions(rng, 2000)
+    fixed = batch.evaluate({"type": "hk", **params}, wi, wo).value[:, 0]
+    grid = batch.evaluate({"type": "hk", **_textured(params)}, wi, wo).value[:, 0]
+    # float32: a logarithm carries |ln x|·2⁻²⁴ ≤ 4e-6 (x ≥ 1e-30), the lerps and sums a few ulps
+    np.testing.assert_allclose(fixed, grid, rtol=2e-5, atol=1e-6 * fixed.max())
