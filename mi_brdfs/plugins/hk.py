@@ -254,10 +254,12 @@ class HK(mi.BSDF):
     (``tests/scattering/test_hk_orders.py``); they are tested against the float64 random walk
     of ``mi_brdfs.reference.hk`` (``tests/plugins/test_hk_all.py``: the light in bands of μo
     and azimuth within that error plus the walk's noise; the white furnace of a conservative
-    slab) and validated against ``volpath`` at full depth. Building them takes about a
-    second at load for g = 0 or over a base, a few for a free slab with g ≠ 0 (more Fourier
-    modes), up to about 10 s for |g| > 0.7 (twice the quadrature nodes); once per process
-    and layer (g, η, base): textures of σs and σa cost nothing more.
+    slab) and validated against ``volpath`` at full depth. Building the grid takes from a
+    fraction of a second at load (g = 0: one Fourier mode; over a base) to several seconds
+    (a free slab with g beyond ±0.7: more modes, twice the quadrature nodes), once per process
+    and layer (g, η, base). The gradients through σs and σa (``mi.traverse``) are the
+    interpolation's own: a first fit step compiles its kernels for about a minute on an empty
+    kernel cache (about 140 small kernels in drjit's reverse mode), later ones are fast.
 
     ``mi_brdfs.reference.hk`` is the model in float64 with a float64 random walk of the
     whole transport, against which the single term is tested
@@ -320,11 +322,10 @@ class HK(mi.BSDF):
 
     def _constant_medium(self):
         """Each channel's (albedo, optical depth) where σs and σa are constants (a number, or
-        in RGB and mono variants an RGB value) carrying no gradient; else None."""
+        in RGB and mono variants an RGB value); else None."""
         textures = (self.m_sigma_s, self.m_sigma_a)
         kinds = ("UniformSpectrum",) + (() if mi.is_spectral else ("SRGBReflectanceSpectrum",))
-        if any(t.class_name() not in kinds for t in textures) or \
-                properties.differentiated(textures):
+        if any(t.class_name() not in kinds for t in textures):
             return None
         si = dr.zeros(mi.SurfaceInteraction3f)
         n = dr.size_v(mi.UnpolarizedSpectrum)
@@ -337,7 +338,8 @@ class HK(mi.BSDF):
 
     def parameters_changed(self, keys=()):
         if self.m_orders is not None:
-            self.m_orders.fix(self._constant_medium())
+            self.m_orders.fix(self._constant_medium(),
+                              properties.differentiated((self.m_sigma_s, self.m_sigma_a)))
         slab = Slab(self.m_sigma_s, self.m_sigma_a, self.m_rho, self.m_thickness, self.m_g,
                     self.m_eta, self.m_base, self.m_orders)
         parts = [Scattered(slab)] + ([] if self.m_base else [Unscattered(slab)])

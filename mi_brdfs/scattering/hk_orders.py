@@ -27,9 +27,10 @@ Below τ₀ the higher orders scale as τ/τ₀ (one scattering with internal re
 
 A medium that is one spectrum over the whole surface and carries no gradient (the usual case)
 has its (a, τ) interpolation done once, on the host, at load (:meth:`Orders.fix`, the same
-formulas in float64: the kernel then reads and interpolates the cosines alone); a textured
-medium, or one being differentiated, interpolates in the kernel. Both are one function of
-(a, τ), so a derivative by AD (the kernel's) matches finite differences of either.
+formulas in float64: the kernel then reads and interpolates the cosines alone; differentiated,
+with the derivatives in a and τ by one-sided differences, carried as derivative × (x −
+detach(x))); a textured medium interpolates in the kernel. Both are one function of (a, τ),
+so derivatives match finite differences of either.
 
 A Lambertian base of reflectance ρ adds ρ E(μi) U(μo)/(1 − ρ S) (light reaching the base,
 leaving the top from it, returning to it: the interreflection between the base and the layer
@@ -54,6 +55,8 @@ N_ALBEDO, N_MU, TAU_MIN, DOUBLINGS = 16, 32, 1.0 / 32.0, 13
 MAX_MODES, CHUNK, MODE_TOLERANCE = 16, 4, 1e-3
 #: The smallest value whose logarithm is tabulated.
 FLOOR = 1e-30
+#: The step of the host's differences in albedo and optical depth.
+DELTA = 1e-6
 #: The error the tables promise: at most this fraction of f·cosθo's largest value at the
 #: incidence, and in the median of each value (tests/scattering/test_hk_orders.py measures
 #: it against the adding-doubling at the very albedo and depth, off the nodes).
@@ -224,17 +227,33 @@ class Orders:
         self.stride = 4 * math.ceil(self.modes / 4)
         self.tables, self.fixed = _pack(self.grid, base, self.modes), None
 
-    def fix(self, channels) -> None:
+    def fix(self, channels, gradient: bool = False) -> None:
         """Interpolate the grid once, on the host, at each channel's (albedo, depth):
-        ``channels`` a list of pairs; None: in the kernel again."""
+        ``channels`` a list of pairs; None: in the kernel again. With ``gradient``, also the
+        derivatives in albedo and depth (one-sided differences of the same interpolation in
+        float64, steps of :data:`DELTA`), which carry a derivative through the kernel's
+        lookups as derivative × (x − detach(x)): zero in value."""
         if channels is None:
             self.fixed = None
             return
         pairs = sorted(set(channels))
-        media = [at_medium(self.grid, a, t, self.base) for a, t in pairs]
-        t = {k: np.stack([m[k] for m in media])[:, None] for k in media[0]}
-        self.fixed = (_pack(t, self.base, self.modes), len(pairs),
+        sets = [self._host([at_medium(self.grid, a, t, self.base) for a, t in pairs])]
+        if gradient:  # a step inside [0, 1] in albedo, up in depth
+            steps = [(-DELTA if a + DELTA > 1.0 else DELTA, DELTA) for a, _ in pairs]
+            for axis in (0, 1):
+                moved = self._host([at_medium(self.grid, a + h[0] * (axis == 0),
+                                              t + h[1] * (axis == 1), self.base)
+                                    for (a, t), h in zip(pairs, steps)])
+                h = np.array([step[axis] for step in steps])
+                sets.append({k: (v - sets[0][k]) / h.reshape((-1,) + (1,) * (v.ndim - 1))
+                             for k, v in moved.items()})
+        self.fixed = ([_pack(t, self.base, self.modes) for t in sets], len(pairs),
                       [pairs.index(c) for c in channels])
+
+    @staticmethod
+    def _host(media: list) -> dict:
+        """The media of :func:`at_medium` stacked (pairs, 1, ...)."""
+        return {k: np.stack([m[k] for m in media])[:, None] for k in media[0]}
 
     def _cell(self, albedo, tau):
         """(albedo node, its fraction in w; τ node (τ = 0 counted), its fraction linear in
@@ -308,19 +327,26 @@ class Orders:
                 self._scalar("S", cell),
                 self._vector("E0", cell, mu_i) * self._vector("U0", cell, mu_o))
         else:
-            tables, count, index = self.fixed
-            p = index[c]
-            corners = [_read4(tables["node"], ((side * count + p) * N_MU + i + di) * N_MU
-                              + o + do, self.stride)[:self.modes]
+            sets, count, index = self.fixed
+            p, shift = index[c], [1.0, albedo - dr.detach(albedo), tau - dr.detach(tau)]
+
+            def read4(k):  # the value, plus the derivatives times zero-valued shifts
+                parts = [_read4(t["node"], k, self.stride) for t in sets]
+                return [sum(d * part[m] for d, part in zip(shift, parts))
+                        for m in range(self.modes)]
+
+            def read(name, k):
+                return sum(d * _read(t[name], k) for d, t in zip(shift, sets))
+
+            corners = [read4(((side * count + p) * N_MU + i + di) * N_MU + o + do)
                        for di in (0, 1) for do in (0, 1)]
             small = 1.0
 
             def vector(name, k, w):
-                return dr.lerp(_read(tables[name], p * N_MU + k),
-                               _read(tables[name], p * N_MU + k + 1), w)
+                return dr.lerp(read(name, p * N_MU + k), read(name, p * N_MU + k + 1), w)
 
             base = None if not self.base else (
-                vector("E", i, fi) * vector("U", o, fo), _read(tables["S"], p),
+                vector("E", i, fi) * vector("U", o, fo), read("S", p),
                 vector("E0", i, fi) * vector("U0", o, fo))
         v = [dr.lerp(dr.lerp(corners[0][k], corners[1][k], fo),
                      dr.lerp(corners[2][k], corners[3][k], fo), fi) for k in range(self.modes)]
