@@ -13,9 +13,9 @@ a texture kind that turns with the plugin and the variant, and so covers every p
 three axes (plugin x kind in the scalar variants, plugin x variant and kind x variant in the
 llvm ones): a pairwise covering design (Cohen et al. 1997, "The AETG System: An Approach to
 Testing Based on Combinatorial Design"), which catches every fault that two of the axes cause
-together, as each of those above did (``make test`` renders the llvm cells in llvm_ad_rgb and
-llvm_ad_spectral_polarized, ``make test-slow`` in llvm_ad_mono and llvm_ad_spectral: see
-tests/tiers.py). ``make test-slow`` (``make test-full``) also runs every cell in every llvm
+together, as each of those above did (``make test`` renders the llvm cells in llvm_ad_rgb,
+and every cell in the scalar variants, scalar_spectral_polarized among them; ``make test-slow``
+in llvm_ad_mono, llvm_ad_spectral and llvm_ad_spectral_polarized: see tests/tiers.py). ``make test-slow`` (``make test-full``) also runs every cell in every llvm
 variant.
 """
 
