@@ -55,9 +55,10 @@ PLUGINS = {
     "hapke": ("w", {"B_0": 1.0, "h": 0.06}),
     "ocean": ("whitecaps", {"wind_speed": 10.0, "wind_direction": 30.0}),
     "hk": ("sigma_s", {"eta": 1.5, "g": 0.5}),
-    # every order: the tables looked up at each channel's albedo and depth, over a base
-    "hk-all": ("sigma_s", {"type": "hk", "scattering": "all", "eta": 1.5, "g": 0.5,
-                           "diffuse_reflectance": 0.4}),
+    # every order over a base, the base's reflectance textured (the row above textures σs;
+    # a textured medium's tables: tests/scattering/test_hk_orders.py)
+    "hk-all": ("diffuse_reflectance", {"type": "hk", "scattering": "all", "eta": 1.5,
+                                       "g": 0.5}),
 }
 
 
