@@ -58,6 +58,16 @@ def variant_llvm_ad_spectral():
     return set_variant("llvm_ad_spectral")
 
 
+@pytest.fixture
+def variant_scalar_spectral():
+    return set_variant("scalar_spectral")
+
+
+@pytest.fixture
+def variant_scalar_spectral_polarized():
+    return set_variant("scalar_spectral_polarized")
+
+
 @pytest.fixture(params=REQUIRED)
 def variants_rgb(request):
     """scalar_rgb and llvm_ad_rgb."""

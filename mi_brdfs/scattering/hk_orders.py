@@ -99,15 +99,7 @@ def grid(g: float, eta: float, base: bool) -> dict:
         _, more = chunk(higher[0].shape[2], CHUNK)
         higher = [np.concatenate([h, more(t) - more(s)], axis=2)
                   for h, (t, s) in zip(higher, pairs)]
-    out = {"tau": np.sort(np.concatenate([[0.0], chains[0].tau[1:], chains[1].tau[1:]])),
-           **_store(higher, merge, tr, base)}
-    return out
-
-
-def _store(higher, merge, tr, base: bool) -> dict:
-    """The tables as the kernel reads them, (a, τ, μi, μo[, m]): ``q``, ``r``, ``qt``,
-    ``rt``, and over a base ``E``, ``U``, ``E0``, ``U0``, ``S`` (see :func:`grid`)."""
-    out = {}
+    out = {"tau": np.sort(np.concatenate([[0.0], chains[0].tau[1:], chains[1].tau[1:]]))}
     for (q, r), h in zip((("q", "r"), ("qt", "rt")), higher):
         f0 = h[:, :, 0]
         out[q] = np.maximum(f0 / np.multiply.outer(tr, tr), FLOOR)

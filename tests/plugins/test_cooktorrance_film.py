@@ -129,18 +129,6 @@ def test05_polarized_zero_thickness_is_mitsubas_fresnel_matrix(variant_scalar_sp
     assert np.abs(thick - bare).max() > 0.01 * np.abs(bare).max()
 
 
-@pytest.fixture
-def variant_scalar_spectral():
-    from conftest import set_variant
-    return set_variant("scalar_spectral")
-
-
-@pytest.fixture
-def variant_scalar_spectral_polarized():
-    from conftest import set_variant
-    return set_variant("scalar_spectral_polarized")
-
-
 def test06_compensated_white_furnace_with_a_film(variant_llvm_ad_rgb):
     """multiscatter over a perfect mirror (η = 0, k = 1) under a film that absorbs nothing:
     the film reflects everything, its F_avg is 1, and the albedo from sample() is 1 within
@@ -152,25 +140,31 @@ def test06_compensated_white_furnace_with_a_film(variant_llvm_ad_rgb):
         assert np.all(np.abs(mean - 1.0) <= 3e-3 + 4 * err), (theta, mean, err)
 
 
-def test07_gradient_through_the_thickness(variant_llvm_ad_spectral):
-    """d eval/d film_thickness by AD (mi.traverse) against a central difference of ±0.5 nm."""
-    bsdf = mi.load_dict({**CONDUCTOR, **FILM})
+def _ad_and_difference(bsdf, key: str, x: float, h: float, traced=lambda: None) -> tuple:
+    """(d Σeval/dx by AD through mi.traverse at x, the central difference over ±h, what
+    ``traced()`` returns while the gradient is enabled) at (WI, WO)."""
     params = mi.traverse(bsdf)
-    key = "film_thickness.value"
     si = batch.interaction(_unit(WI), 1)
-    wo = mi.Vector3f(*[float(x) for x in _unit(WO)])
+    wo = mi.Vector3f(*[float(v) for v in _unit(WO)])
 
-    def value(d, grad=False):
-        params[key] = mi.Float(d)
+    def value(v, grad=False):
+        params[key] = mi.Float(v)
         if grad:
             dr.enable_grad(params[key])
         params.update()
         return bsdf.eval(mi.BSDFContext(), si, wo), params[key]
-    out, d = value(320.0, True)
+    out, var = value(x, True)
+    seen = traced()
     dr.backward(dr.sum(out))
-    got = dr.grad(d)[0]
-    hi, lo = value(320.5)[0], value(319.5)[0]
-    want = float(dr.sum(hi - lo)[0])
+    got = dr.grad(var)[0]
+    want = float(dr.sum(value(x + h)[0] - value(x - h)[0])[0]) / (2.0 * h)
+    return got, want, seen
+
+
+def test07_gradient_through_the_thickness(variant_llvm_ad_spectral):
+    """d eval/d film_thickness by AD (mi.traverse) against a central difference of ±0.5 nm."""
+    got, want, _ = _ad_and_difference(mi.load_dict({**CONDUCTOR, **FILM}),
+                                      "film_thickness.value", 320.0, 0.5)
     assert got == pytest.approx(want, rel=2e-2) and abs(got) > 1e-4
 
 
@@ -179,22 +173,9 @@ def test08_rgb_gradient_through_the_film_index(variant_llvm_ad_rgb):
     a table: d eval/d film_eta by AD against a central difference of ±1e-3."""
     bsdf = mi.load_dict({**CONDUCTOR, **FILM})
     assert bsdf.lobes.lobes[0].film_table is not None  # tabulated while nothing is traced
-    params = mi.traverse(bsdf)
-    key = "film_eta.value"
-    si = batch.interaction(_unit(WI), 1)
-    wo = mi.Vector3f(*[float(x) for x in _unit(WO)])
-
-    def value(n, grad=False):
-        params[key] = mi.Float(n)
-        if grad:
-            dr.enable_grad(params[key])
-        params.update()
-        return bsdf.eval(mi.BSDFContext(), si, wo), params[key]
-    out, n = value(1.47, True)
-    assert bsdf.lobes.lobes[0].film_table is None
-    dr.backward(dr.sum(out))
-    got = dr.grad(n)[0]
-    want = float(dr.sum(value(1.471)[0] - value(1.469)[0])[0]) / 0.002
+    got, want, table = _ad_and_difference(bsdf, "film_eta.value", 1.47, 1e-3,
+                                          lambda: bsdf.lobes.lobes[0].film_table)
+    assert table is None
     assert got == pytest.approx(want, rel=2e-2) and abs(got) > 1e-3
 
 
@@ -205,21 +186,8 @@ def test09_rgb_uniform_thickness_table_and_its_gradient(variant_llvm_ad_rgb):
     AD against a central difference of ±0.5 nm, within 2 %."""
     bsdf = mi.load_dict({**CONDUCTOR, **FILM})
     assert bsdf.lobes.lobes[0].film_table.uniform
-    params = mi.traverse(bsdf)
-    key = "film_thickness.value"
-    si = batch.interaction(_unit(WI), 1)
-    wo = mi.Vector3f(*[float(x) for x in _unit(WO)])
-
-    def value(d, grad=False):
-        params[key] = mi.Float(d)
-        if grad:
-            dr.enable_grad(params[key])
-        params.update()
-        return bsdf.eval(mi.BSDFContext(), si, wo), params[key]
-    out, d = value(320.0, True)
-    assert bsdf.lobes.lobes[0].film_table is None
-    dr.backward(dr.sum(out))
-    got = dr.grad(d)[0]
-    want = float(dr.sum(value(320.5)[0] - value(319.5)[0])[0])
+    got, want, table = _ad_and_difference(bsdf, "film_thickness.value", 320.0, 0.5,
+                                          lambda: bsdf.lobes.lobes[0].film_table)
+    assert table is None
     assert bsdf.lobes.lobes[0].film_table.uniform
     assert got == pytest.approx(want, rel=2e-2) and abs(got) > 1e-4
