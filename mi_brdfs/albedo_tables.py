@@ -18,12 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .scattering.multiscatter import MU_GRAZING, alpha_nodes, average, mu_nodes  # noqa: F401
+
 #: Nodes in μ (uniform in sqrt μ) and α (uniform in sqrt(α/α_max)); the largest α.
 N_MU, N_ALPHA, ALPHA_MAX = 64, 128, 2.0
-
-#: The incidence cosine at which the node μ = 0 is computed (a lobe at μ = 0 exactly is
-#: undefined: ωi lies in the surface); it stands for μ < 2.5e-4 (θ > 89.99°).
-MU_GRAZING = 1e-4
 
 #: Samples per node: an n × n grid (512: within 7e-5 of 4096 × 4096 from μ = 0.016 up, and
 #: within 1e-5 of GGX's exact visible-normal sampler at 1024 × 1024).
@@ -40,26 +38,9 @@ KINDS = ("beckmann", "ggx")
 SHADOWINGS = ("smith", "vcavity")
 
 
-def mu_nodes(n_mu: int = N_MU) -> np.ndarray:
-    """The incidence cosines of the nodes: x² on x uniform in [0, 1], the first MU_GRAZING."""
-    mu = np.linspace(0.0, 1.0, n_mu) ** 2
-    mu[0] = MU_GRAZING
-    return mu
-
-
 def eta_nodes(n_eta: int = N_ETA, eta_max: float = ETA_MAX) -> np.ndarray:
     """The relative indices of the dielectric's nodes: uniform in log η on [1/η_max, η_max]."""
     return np.exp(np.linspace(-np.log(eta_max), np.log(eta_max), n_eta))
-
-
-def alpha_nodes(n_alpha: int = N_ALPHA, alpha_max: float = ALPHA_MAX) -> np.ndarray:
-    """The roughnesses of the nodes: α_max·y² on y uniform in [0, 1], the first (0) at the
-    plugin's smallest α (:data:`~mi_brdfs.scattering.microfacet.ALPHA_MIN`)."""
-    from .scattering.microfacet import ALPHA_MIN
-
-    alpha = alpha_max * np.linspace(0.0, 1.0, n_alpha) ** 2
-    alpha[0] = ALPHA_MIN
-    return alpha
 
 
 def albedo_row(kind: str, shadowing: str, alpha: float, mus: np.ndarray,
@@ -120,29 +101,11 @@ def mean_weights(bsdf, ctx, mus: np.ndarray, samples: int, chunk: int) -> np.nda
     return np.concatenate(out)
 
 
-def average(E: np.ndarray) -> np.ndarray:
-    """
-    E_avg = 2∫E(μ)μ dμ = 4∫E(x)x³dx of rows of E that are piecewise linear in x = sqrt μ on
-    uniform nodes (exact: a cubic per segment, 3 Gauss-Legendre nodes each).
-    """
-    E = np.atleast_2d(E)
-    n = E.shape[1]
-    x, w = np.polynomial.legendre.leggauss(3)
-    t, w = (x + 1.0) / 2.0, w / 2.0  # on [0, 1]
-    h = 1.0 / (n - 1)
-    total = np.zeros(E.shape[0])
-    for tk, wk in zip(t, w):
-        xs = (np.arange(n - 1) + tk) * h
-        values = E[:, :-1] * (1.0 - tk) + E[:, 1:] * tk
-        total += 4.0 * h * wk * (values * xs ** 3).sum(axis=1)
-    return total
-
-
 def build(kinds=KINDS, shadowings=SHADOWINGS, n_mu: int = N_MU, n_alpha: int = N_ALPHA,
           samples: int = SAMPLES, progress=None) -> dict[str, np.ndarray]:
     """The conductor's arrays of the table file: ``E_<kind>-<shadowing>`` (n_alpha, n_mu),
     ``E_avg_<kind>-<shadowing>`` (n_alpha,), ``alpha_max``, ``samples``."""
-    mus, alphas = mu_nodes(n_mu), alpha_nodes(n_alpha)
+    mus, alphas = mu_nodes(n_mu), alpha_nodes(n_alpha, ALPHA_MAX)
     out = {"alpha_max": np.float64(ALPHA_MAX), "samples": np.int64(samples)}
     for kind in kinds:
         for shadowing in shadowings:
@@ -163,7 +126,7 @@ def build_dielectric(kinds=KINDS, n_mu: int = N_MU_DIELECTRIC,
     ``ET_<kind>-smith`` (n_eta, n_alpha, n_mu), E_R+T lit from above at relative index η
     (lit from below at η it is the table at 1/η), ``ET_avg_<kind>-smith`` (n_eta, n_alpha),
     ``eta_max``, ``samples_dielectric``."""
-    mus, alphas, etas = mu_nodes(n_mu), alpha_nodes(n_alpha), eta_nodes(n_eta)
+    mus, alphas, etas = mu_nodes(n_mu), alpha_nodes(n_alpha, ALPHA_MAX), eta_nodes(n_eta)
     out = {"eta_max": np.float64(ETA_MAX), "samples_dielectric": np.int64(samples)}
     for kind in kinds:
         rows = []

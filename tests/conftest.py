@@ -68,6 +68,12 @@ def variant_scalar_spectral_polarized():
     return set_variant("scalar_spectral_polarized")
 
 
+@pytest.fixture(params=["llvm_ad_rgb", "llvm_ad_spectral"])
+def variants_llvm_rgb_spectral(request):
+    """llvm_ad_rgb and llvm_ad_spectral."""
+    return set_variant(request.param)
+
+
 @pytest.fixture(params=REQUIRED)
 def variants_rgb(request):
     """scalar_rgb and llvm_ad_rgb."""

@@ -382,9 +382,15 @@ class CookTorrance(mi.BSDF):
     film's Mueller matrix (Mitsuba's Fresnel matrix without a film; in mono polarized
     variants at the channel's mean wavelength). With ``multiscatter`` on a conductor, F_avg
     is the film's (a 5-node rule at the hit point), so a non-absorbing film on a perfect
-    mirror keeps the white furnace at 1; ``multiscatter`` with ``transmission`` and a film is
-    refused (the dielectric's albedo tables are of the bare interface), as are a film with
-    ``fresnel`` other than ``exact`` and ``film_eta`` without ``film_thickness``.
+    mirror keeps the white furnace at 1. With ``transmission`` the dielectric's albedo tables
+    are shifted per channel by what the film changes, Σ_j K_j(μ) (R − F)(c_j) over 12 facet
+    cosines c_j, the kernels K_j of the masking's difference between reflection and
+    refraction computed at load for the material's η
+    (:mod:`mi_brdfs.scattering.multiscatter_film`), so the compensated rough glass under a
+    film keeps the white furnace at 1 too. From inside, an RGB film's colour is its table
+    from outside read at Snell's image of the cosine (a lossless stack reflects the same from
+    both sides), which keeps the refraction reciprocal. A film with ``fresnel`` other than
+    ``exact``, and ``film_eta`` without ``film_thickness``, are refused.
 
     .. tabs::
         .. code-tab:: xml
@@ -433,8 +439,7 @@ class CookTorrance(mi.BSDF):
         self.m_specular_reflectance = properties.reflectance(props, PLUGIN,
                                                              "specular_reflectance", 1.0)
         #: The thin film (cooktorrance_film.Film), None without one.
-        self.m_film = cooktorrance_film.read(props, PLUGIN, self.m_transmission, self.m_fresnel,
-                                             self.m_multiscatter)
+        self.m_film = cooktorrance_film.read(props, PLUGIN, self.m_fresnel)
         if self.m_transmission:
             self._read_transmission(props)
         else:

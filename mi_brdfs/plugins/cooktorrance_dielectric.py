@@ -18,7 +18,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..scattering import fresnel, microfacet, multiscatter, vector
+from ..scattering import fresnel, microfacet, multiscatter, multiscatter_film, vector
 from . import lobes, properties
 
 
@@ -39,7 +39,9 @@ class MicrofacetInterface(lobes.Lobe):
     :class:`InterfaceCompensation` of it needs (it then weighs the lobe as well). Parameter
     ``film`` (:class:`~mi_brdfs.plugins.cooktorrance_film.Film` | None): a thin film on the
     interface: its reflectance R per channel replaces F, refraction takes 1 − R (the film
-    absorbs nothing: R + T = 1), and the choice between them is made by the mean of R.
+    absorbs nothing: R + T = 1), and the choice between them is made by the mean of R; with
+    the tables as well, E_R+T and the average transmittance are shifted per channel by what
+    the film changes (:class:`~mi_brdfs.scattering.multiscatter_film.FilmShift`).
     """
 
     kind = "GlossyReflection"
@@ -50,9 +52,9 @@ class MicrofacetInterface(lobes.Lobe):
         #: the densest medium light arrives from (the film's branches depend on it)
         value = float(np.asarray(eta, np.float64).ravel()[0])
         self.n1_max = max(1.0, value)
-        #: the film's colour from outside and from inside, tabulated where it can be
-        self.film_table = None if film is None else \
-            film.tabulate([(1.0, value, 0.0), (value, 1.0, 0.0)])
+        #: the film's colour from outside, tabulated where it can be (from inside it is the
+        #: same at Snell's image of the cosine: :meth:`reflectance`)
+        self.film_table = None if film is None else film.tabulate([(1.0, eta, 0.0)])
         self.distribution_kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
         self.sample_visible, self.flags = sample_visible, flags
         # the relative index both ways (opaque: a changed η updates the kernel's inputs)
@@ -64,6 +66,19 @@ class MicrofacetInterface(lobes.Lobe):
         if tables is not None:
             self.t_above = 1.0 - multiscatter.fresnel_average(self.eta, 0.0, nodes=32)
             dr.make_opaque(self.t_above)
+        #: with the tables and a film: the film's shift of the tables, and where the film is
+        #: the same everywhere and its colour integrated per channel, its nodes' ΔF once
+        self.film_shift = self.film_deltas = None
+        if tables is not None and film is not None:
+            ranges = [properties.texture_range(a) for a in (alpha_u, alpha_v)]
+            self.film_shift = multiscatter_film.FilmShift(
+                kind, eta, multiscatter.uniform_alpha(alpha_u, alpha_v),
+                None if None in ranges else (min(r[0] for r in ranges),
+                                             max(r[1] for r in ranges)))
+            if film.sensitivity is not None and not (film.thickness.is_spatially_varying() or
+                                                     film.eta.is_spatially_varying()):
+                self.film_deltas = self._film_deltas(dr.zeros(mi.SurfaceInteraction3f), True,
+                                                     constant=True)
 
     def component_flags(self) -> dict:
         return {0: self.flags[0], 1: self.flags[1]}
@@ -207,12 +222,22 @@ class MicrofacetInterface(lobes.Lobe):
             F = fresnel.dielectric(cos_im, self.eta)[0]
             return F if pick else (F, F)
         outside = cos_im >= 0.0
-        n1, n3 = dr.select(outside, 1.0, self.eta), dr.select(outside, self.eta, 1.0)
-        args = (si, dr.abs(cos_im), n1, n3, 0.0, active, self.n1_max, self.film_table,
-                dr.select(outside, mi.UInt32(0), mi.UInt32(1)))
+        cos = dr.abs(cos_im)
+        if self.film_table is None:
+            n1, n3 = dr.select(outside, 1.0, self.eta), dr.select(outside, self.eta, 1.0)
+            args = (si, cos, n1, n3, 0.0, active, self.n1_max)
+            total = False
+        else:
+            # the film absorbs nothing, nor does either side: the stack reflects the same from
+            # both sides of a refraction (Stokes' relations), so from inside the table from
+            # outside is read at Snell's image of the cosine, and R = 1 where there is none
+            cos_out2 = 1.0 - dr.square(self.eta) * (1.0 - dr.square(cos))
+            total = (cos_im < 0.0) & (cos_out2 <= 0.0)
+            args = (si, dr.select(outside, cos, dr.safe_sqrt(cos_out2)), 1.0, self.eta, 0.0,
+                    active, self.n1_max, self.film_table, 0)
         if pick:
-            return self.film.mean_reflectance(*args)
-        F = self.film.reflectance(*args)
+            return dr.select(total, 1.0, self.film.mean_reflectance(*args))
+        F = dr.select(total, 1.0, self.film.reflectance(*args))
         return F, dr.mean(F)
 
     def _sample_normal(self, si, wi_up, active, sample2):
@@ -234,20 +259,41 @@ class MicrofacetInterface(lobes.Lobe):
         1 (the lobe is then sampled alone)."""
         if self.tables is None:
             return mi.Float(1.0)
-        return dr.clip(self.albedo(si, dr.abs(si.wi.z), si.wi.z > 0.0, active)[0], 0.0, 1.0)
+        e_i = self.albedo(si, dr.abs(si.wi.z), si.wi.z > 0.0, active)[0]
+        return dr.clip(mean(e_i), 0.0, 1.0)
 
     def albedo(self, si, mu, above, active):
-        """(E(μ), E_avg) of the side ``above`` (a mask) at the roughness at ``si``."""
+        """(E(μ), E_avg) of the side ``above`` (a mask) at the roughness at ``si``: Floats, or
+        with a film spectra (per channel)."""
         alpha = lambda: multiscatter.equivalent_alpha(self.distribution(si, active))  # noqa: E731
         (e0, a0), (e1, a1) = (table(mu, alpha) for table in self.tables)
-        return dr.select(above, e0, e1), dr.select(above, a0, a1)
+        e, e_avg = dr.select(above, e0, e1), dr.select(above, a0, a1)
+        if self.film_shift is None:
+            return e, e_avg
+        de, de_avg = self.film_shift(self._film_deltas(si, active), mu, above, alpha)
+        return e + de, e_avg + de_avg
+
+    def _film_deltas(self, si, active, constant: bool = False):
+        """The film's reflectance less the bare interface's at the film shift's nodes (at
+        ``si``, or the material's where they were computed once)."""
+        if self.film_deltas is not None:
+            return self.film_deltas
+        return self.film_shift.deltas(
+            lambda c: self.film.reflectance(si, c, 1.0, self.eta, 0.0, active, self.n1_max,
+                                            self.film_table, 0), self.eta, constant)
 
     def shares(self, si, active):
         """(x_above, x_below): the compensation's refracted share lit from each side
-        (:func:`~mi_brdfs.scattering.multiscatter.transmitted_shares`)."""
+        (:func:`~mi_brdfs.scattering.multiscatter.transmitted_shares`), per channel with a
+        film."""
         alpha = lambda: multiscatter.equivalent_alpha(self.distribution(si, active))  # noqa: E731
-        return multiscatter.transmitted_shares(self.t_above, self.eta,
-                                               *(table.average(alpha) for table in self.tables))
+        t_above, averages = self.t_above, [table.average(alpha) for table in self.tables]
+        if self.film_shift is not None:
+            deltas = self._film_deltas(si, active)
+            t_above = t_above + self.film_shift.transmittance_shift(deltas)
+            averages = [a + d for a, d in zip(averages,
+                                              self.film_shift.averages(deltas, alpha))]
+        return multiscatter.transmitted_shares(t_above, self.eta, *averages)
 
 
 class InterfaceCompensation(lobes.Lobe):
@@ -281,7 +327,7 @@ class InterfaceCompensation(lobes.Lobe):
         x = dr.select(si.wi.z > 0.0, x_above, x_below)
         e_i = self.source.albedo(si, dr.abs(si.wi.z), si.wi.z > 0.0, active)[0]
         missing = dr.maximum(1.0 - e_i, 0.0) * dr.inv_pi
-        q_reflect = (1.0 - x) if (has_r and has_t) else (1.0 if has_r else 0.0)
+        q_reflect = (1.0 - mean(x)) if (has_r and has_t) else (1.0 if has_r else 0.0)
         return q_reflect, missing * (1.0 - x), missing * x
 
     def eval_pdf(self, ctx, si, wo, active):
@@ -313,7 +359,12 @@ class InterfaceCompensation(lobes.Lobe):
     def weight(self, ctx, si, active):
         """1 − E(μi) of ωi's side: what single scattering misses."""
         e_i = self.source.albedo(si, dr.abs(si.wi.z), si.wi.z > 0.0, active)[0]
-        return 1.0 - dr.clip(e_i, 0.0, 1.0)
+        return 1.0 - dr.clip(mean(e_i), 0.0, 1.0)
+
+
+def mean(value):
+    """The mean over the channels of a spectrum (a film's albedo), a Float as it is."""
+    return value if isinstance(value, (int, float, mi.Float)) else dr.mean(value)
 
 
 def _chosen(probability):

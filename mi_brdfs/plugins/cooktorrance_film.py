@@ -23,7 +23,7 @@ from . import properties
 THICKNESS_MAX, FILM_ETA_MAX = 1e5, 100.0
 
 
-def read(props, plugin: str, transmission: bool, fresnel_kind: str, multiscatter: bool):
+def read(props, plugin: str, fresnel_kind: str):
     """The :class:`Film` of the properties, or None where ``film_thickness`` is absent or the
     constant 0; ``film_eta`` without ``film_thickness``, and a film with a Fresnel term
     other than ``exact``, are refused (one line each)."""
@@ -39,10 +39,6 @@ def read(props, plugin: str, transmission: bool, fresnel_kind: str, multiscatter
         raise ParameterError(plugin, "film_thickness", props["film_thickness"],
                              f"needs fresnel = \"exact\" (not \"{fresnel_kind}\"): the film's "
                              f"reflectance replaces the exact Fresnel term")
-    if transmission and multiscatter:
-        raise ParameterError(plugin, "film_thickness", props["film_thickness"],
-                             "must not be given with transmission and multiscatter: the "
-                             "dielectric's albedo tables are of the bare interface")
     if properties.is_zero(thickness):
         return None
     return Film(thickness, eta)
@@ -90,7 +86,8 @@ class Film:
             if base[0] is None or base[1] is None:
                 return None
             index = tuple(complex(e, k) for e, k in zip(*base))
-            tables.append(thinfilm_table.build(self.sensitivity.channels, float(n1), n2, index,
+            n1 = float(np.asarray(n1, np.float64).ravel()[0])
+            tables.append(thinfilm_table.build(self.sensitivity.channels, n1, n2, index,
                                                rng[1], uniform))
         return thinfilm_table.ColourTable(tables, n2)
 

@@ -318,3 +318,44 @@ def fresnel_average(eta, k, nodes: int = 5):
 def schlick_average(f0):
     """F_avg of Schlick's approximation in closed form: R0 + (1 − R0)/21 (2∫(1−μ)⁵μ dμ = 1/21)."""
     return f0 + (1.0 - f0) / 21.0
+
+
+# -- the tables' nodes (mi-brdfs tables builds on them, the film's shift too) ---------------
+
+#: The incidence cosine at which the node μ = 0 is computed (a lobe at μ = 0 exactly is
+#: undefined: ωi lies in the surface); it stands for μ < 2.5e-4 (θ > 89.99°).
+MU_GRAZING = 1e-4
+
+def mu_nodes(n_mu: int) -> np.ndarray:
+    """The incidence cosines of the nodes: x² on x uniform in [0, 1], the first MU_GRAZING."""
+    mu = np.linspace(0.0, 1.0, n_mu) ** 2
+    mu[0] = MU_GRAZING
+    return mu
+
+
+def alpha_nodes(n_alpha: int, alpha_max: float) -> np.ndarray:
+    """The roughnesses of the nodes: α_max·y² on y uniform in [0, 1], the first (0) at the
+    plugin's smallest α (:data:`~mi_brdfs.scattering.microfacet.ALPHA_MIN`)."""
+    from .microfacet import ALPHA_MIN
+
+    alpha = alpha_max * np.linspace(0.0, 1.0, n_alpha) ** 2
+    alpha[0] = ALPHA_MIN
+    return alpha
+
+
+def average(E: np.ndarray) -> np.ndarray:
+    """
+    E_avg = 2∫E(μ)μ dμ = 4∫E(x)x³dx of rows of E that are piecewise linear in x = sqrt μ on
+    uniform nodes (exact: a cubic per segment, 3 Gauss-Legendre nodes each).
+    """
+    E = np.atleast_2d(E)
+    n = E.shape[1]
+    x, w = np.polynomial.legendre.leggauss(3)
+    t, w = (x + 1.0) / 2.0, w / 2.0  # on [0, 1]
+    h = 1.0 / (n - 1)
+    total = np.zeros(E.shape[0])
+    for tk, wk in zip(t, w):
+        xs = (np.arange(n - 1) + tk) * h
+        values = E[:, :-1] * (1.0 - tk) + E[:, 1:] * tk
+        total += 4.0 * h * wk * (values * xs ** 3).sum(axis=1)
+    return total
