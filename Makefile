@@ -29,7 +29,7 @@ $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV) || { \
 	  echo "make: could not create $(VENV); install python3-venv (apt-get install python3-venv)"; exit 1; }
 	$(PY) -m pip install --disable-pip-version-check -q --upgrade pip
-	$(PY) -m pip install --disable-pip-version-check -q -e '.[test,plots,sweep]'
+	$(PY) -m pip install --disable-pip-version-check -q -e '.[test,plots,sweep,explore]'
 	@touch $@
 
 setup: $(STAMP)

@@ -46,3 +46,11 @@ __all__ = [
 from .registry import _install as _install  # noqa: E402
 
 _install()
+
+
+def explore(*bsdfs, variant=None):
+    """The interactive explorer of 1 to 4 BSDFs as a Panel layout, for Jupyter notebooks
+    (:func:`mi_brdfs.explorer.explore`; needs ``pip install 'mi-brdfs[explore]'``)."""
+    from .explorer import explore as _explore
+
+    return _explore(*bsdfs, variant=variant)

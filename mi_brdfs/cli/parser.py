@@ -12,8 +12,8 @@ from pathlib import Path
 from ..fit.optimise import METRICS
 
 from .commands import (
-    EXIT_USER_ERROR, cmd_check, cmd_compare, cmd_fit, cmd_furnace, cmd_info, cmd_measure,
-    cmd_plot, cmd_presets, cmd_render, cmd_simplify, cmd_tables,
+    EXIT_USER_ERROR, cmd_check, cmd_compare, cmd_explore, cmd_fit, cmd_furnace, cmd_info,
+    cmd_measure, cmd_plot, cmd_presets, cmd_render, cmd_simplify, cmd_tables,
 )
 from .reports import cmd_audit, cmd_bench, cmd_validate
 
@@ -56,6 +56,7 @@ _seed = _number(int, "a whole number", lambda v: 0 <= v < 2**32, "must lie in [0
 _finite = _number(float, "a number", math.isfinite, "must be finite")
 _seconds = _number(float, "a number", lambda v: math.isfinite(v) and v > 0,
                    "must be finite and > 0 seconds")
+_port = _number(int, "a port number", lambda v: 1 <= v <= 65535, "must lie in [1, 65535]")
 _positive = _number(float, "a number", lambda v: math.isfinite(v) and v > 0,
                     "must be finite and > 0")
 #: A relative error: a relative RMSE of 1 is that of a black image against any other
@@ -113,6 +114,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_tables(sub)
     _add_measure(sub)
     _add_presets(sub)
+    _add_explore(sub)
     _add_info(sub)
     return parser
 
@@ -482,6 +484,20 @@ def _add_presets(sub) -> None:
     p.add_argument("plugin", nargs="?", metavar="PLUGIN",
                    help="list this plugin's presets (e.g. ward)")
     p.set_defaults(func=cmd_presets)
+
+
+def _add_explore(sub) -> None:
+    """``mi-brdfs explore``."""
+    e = _bsdf_command(sub, "explore", "an interactive BRDF explorer in the browser",
+                      "Serve a page on 127.0.0.1 that shows up to four BSDFs computed by their "
+                      "own eval and sample (polar plot, albedo, their XML), with a slider for "
+                      "each parameter mi.traverse exposes; opens the browser. Ctrl-C stops. "
+                      "Needs the explore extra: pip install 'mi-brdfs[explore]'.")
+    e.add_argument("--port", type=_port, help="the port (default: a free one)")
+    e.add_argument("--host", metavar="ADDRESS",
+                   help="listen on this address instead of 127.0.0.1 (others can reach it)")
+    e.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    e.set_defaults(func=cmd_explore)
 
 
 def _add_info(sub) -> None:

@@ -1,0 +1,221 @@
+"""
+What ``mi-brdfs explore`` shows, without the page: a :class:`Session` holds up to four BSDFs
+loaded once in a JIT variant, the controls that their ``mi.traverse`` parameters give
+(:class:`Control`), and computes each view from the BSDF's own ``eval`` and ``sample``. A
+change of a parameter goes through ``mi.traverse`` (``params.update()``), never through a new
+plugin object, so the kernels traced for the views are reused (Mitsuba's documentation,
+"Scene parameters": parameters updated in place keep the kernels' inputs, not their code).
+
+Ranges of the sliders: Mitsuba's ``mi.traverse`` gives values, not ranges; a parameter's
+range is taken from its name (:data:`RANGES`: roughness, indices, reflectances, exponents,
+lengths), else from its value (0 to twice it), and a value typed beyond it is still accepted
+where the plugin accepts it.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..bsdfspec import describe, load_bsdf, parse, to_xml
+from ..errors import MiBrdfsError
+
+#: Up to this many BSDFs side by side.
+MAX_BSDFS = 4
+
+#: (pattern on the parameter's last name, lo, hi, log scale): the first that matches.
+RANGES = (
+    (r"^(alpha(_u|_v)?|roughness|sigma0?|m)$", 1e-3, 2.0, True),
+    (r"^(int_ior|ext_ior|eta|film_eta)$", 1.0, 3.0, False),
+    (r"^k$", 0.0, 10.0, False),
+    (r"(reflectance|transmittance|albedo|weight)$", 0.0, 1.0, False),
+    (r"^(exponent|n|shininess|nu|nv)$", 1.0, 1e4, True),
+    (r"^(film_thickness|thickness)$", 1.0, 1e4, True),
+    (r"^(sigma_s|sigma_a)$", 1e-3, 1e3, True),
+    (r"^g$", -0.99, 0.99, False),
+)
+
+
+@dataclass
+class Control:
+    """One parameter of one BSDF: its ``mi.traverse`` key, ``channels`` numbers (1, or 3 for
+    a colour), the slider's range and scale, and its value now (a float or a 3-tuple)."""
+    key: str
+    channels: int
+    lo: float
+    hi: float
+    log: bool
+    value: object
+
+    @property
+    def label(self) -> str:
+        """The parameter's name without Mitsuba's ``.value`` suffix."""
+        return self.key[:-len(".value")] if self.key.endswith(".value") else self.key
+
+
+def _range(key: str, low: float, high: float) -> tuple[float, float, bool]:
+    """(lo, hi, log) of a parameter from its last name, widened to its values (``low`` to
+    ``high``), else from its values."""
+    name = key.split(".")[-2] if key.endswith(".value") else key.split(".")[-1]
+    for pattern, lo, hi, log in RANGES:
+        if re.search(pattern, name):
+            return (min(lo, low) if not log or low > 0 else lo), max(hi, high), log
+    return min(0.0, low), max(1.0, 2.0 * abs(high)), False
+
+
+def controls(params) -> list[Control]:
+    """A control for each parameter of ``params`` (``mi.traverse``) that is one number or one
+    colour: the differentiable and the discontinuous ones alike; textures with more values
+    (bitmaps) and other types have none."""
+    import drjit as dr
+
+    out = []
+    for key in params.keys():
+        value = params[key]
+        if not dr.is_array_v(value) or dr.width(value) != 1:
+            continue
+        numbers = np.array(value, np.float64).ravel()
+        if numbers.size not in (1, 3) or not np.all(np.isfinite(numbers)):
+            continue
+        lo, hi, log = _range(key, float(numbers.min()), float(numbers.max()))
+        shown = float(numbers[0]) if numbers.size == 1 else tuple(float(v) for v in numbers)
+        out.append(Control(key, numbers.size, lo, hi, log, shown))
+    return out
+
+
+class Entry:
+    """One BSDF of a session: the spec it was given as, the loaded ``mi.BSDF``, its
+    parameters and controls."""
+
+    def __init__(self, spec):
+        import mitsuba as mi
+
+        self.spec = parse(spec)
+        self.bsdf = load_bsdf(self.spec)
+        self.params = mi.traverse(self.bsdf)
+        self.controls = {c.key: c for c in controls(self.params)}
+        self.name = describe(self.spec)
+        #: the labels of the parameters set since loading (the dict and XML write those)
+        self.changed = set()
+
+    def set(self, key: str, value) -> None:
+        """Set a parameter through ``mi.traverse`` (no new plugin object, no re-trace); a value
+        the plugin refuses, or that is no number, raises MiBrdfsError with one line and leaves
+        the BSDF as it was."""
+        import drjit as dr
+
+        control = self.controls.get(key)
+        if control is None:
+            raise MiBrdfsError(f"{self.name}: no parameter {key!r} (it has: "
+                               f"{', '.join(self.controls) or 'none'})")
+        numbers = _numbers(self.name, control, value)
+        self._validate(control, numbers)
+        old = self.params[key]
+        self.params[key] = type(old)(*numbers) if control.channels == 3 else type(old)(numbers[0])
+        try:
+            self.params.update()
+        except RuntimeError as e:
+            self.params[key] = old
+            self.params.update()
+            raise MiBrdfsError(f"{self.name}: {control.label} = {value}: "
+                               f"{str(e).strip().splitlines()[-1]}") from None
+        dr.eval(self.params[key])
+        control.value = numbers[0] if control.channels == 1 else tuple(numbers)
+        self.changed.add(control.label)
+
+    def _validate(self, control: Control, numbers: list[float]) -> None:
+        """Where the BSDF was given as a dict, the plugin's own checks of the new value: the
+        dict with it is loaded (and dropped), and what the plugin refuses is raised in its
+        own words (``mi.traverse`` updates are not checked by every plugin)."""
+        if not isinstance(self.spec, dict) or "." in control.label:
+            return
+        spec = self.as_dict()
+        spec[control.label] = {"type": "rgb", "value": numbers} if control.channels == 3 \
+            else numbers[0]
+        if control.label in ("eta", "k"):
+            spec.pop("material", None)
+            for other in ("eta", "k"):  # material gave both: the other keeps its value
+                if other != control.label and other not in spec and other in self.values():
+                    v = self.values()[other]
+                    spec[other] = {"type": "rgb", "value": list(v)} \
+                        if isinstance(v, tuple) else v
+        load_bsdf(spec)
+
+    def values(self) -> dict:
+        """The controls' current values by label."""
+        return {c.label: c.value for c in self.controls.values()}
+
+    def as_dict(self) -> dict | None:
+        """The spec as a ``mi.load_dict`` dict with the parameters set since loading, where
+        it was given as a dict or a command line (else None: the XML fragment it was given as
+        is shown as it is). A colour is an ``rgb`` object; a parameter set over what gave it
+        (an index over ``material``) replaces it."""
+        if not isinstance(self.spec, dict):
+            return None
+        out = dict(self.spec)
+        for label in sorted(self.changed):
+            if "." in label:  # a nested object's parameter: not a key of this dict
+                continue
+            value = self.values()[label]
+            out[label] = {"type": "rgb", "value": list(value)} \
+                if isinstance(value, tuple) else value
+            if label in ("eta", "k") and out.pop("material", None) is not None:
+                other = "k" if label == "eta" else "eta"
+                if other not in self.changed and other in self.values():
+                    v = self.values()[other]
+                    out[other] = {"type": "rgb", "value": list(v)} \
+                        if isinstance(v, tuple) else v
+        return out
+
+    def xml(self) -> str:
+        """The XML fragment that reproduces the BSDF with the current values."""
+        spec = self.as_dict()
+        return to_xml(spec if spec is not None else self.spec)
+
+
+def _numbers(name: str, control: Control, value) -> list[float]:
+    """The value as ``control.channels`` finite floats (a number, or three for a colour; one
+    number for a colour is grey), else MiBrdfsError with one line."""
+    try:
+        numbers = [float(v) for v in (value if isinstance(value, (list, tuple)) else [value])]
+    except (TypeError, ValueError):
+        numbers = []
+    if len(numbers) == 1 and control.channels == 3:
+        numbers = numbers * 3
+    if len(numbers) != control.channels or not all(math.isfinite(v) for v in numbers):
+        raise MiBrdfsError(f"{name}: {control.label} = {value!r}: expected "
+                           f"{'a number' if control.channels == 1 else 'a colour (r, g, b)'}")
+    return numbers
+
+
+class Session:
+    """Up to :data:`MAX_BSDFS` BSDFs, loaded in the current (JIT) variant."""
+
+    def __init__(self, specs):
+        specs = list(specs)
+        if not 1 <= len(specs) <= MAX_BSDFS:
+            raise MiBrdfsError(f"explore: give 1 to {MAX_BSDFS} BSDFs, got {len(specs)}")
+        self.entries = [Entry(spec) for spec in specs]
+
+    def polar(self, theta_i_deg: float, n: int = 181, cosine: bool = True):
+        """The views' polar plot: θo from −90° to 90° in the plane of incidence (ωi on the
+        negative side) and each BSDF's f·cosθo (or f), the mean of its channels."""
+        from ..plots import lobe_values
+
+        curves = [lobe_values(e.bsdf, theta_i_deg, n, cosine) for e in self.entries]
+        return curves[0][0], [values for _, values in curves]
+
+    def albedo(self, thetas_deg, n: int = 20_000):
+        """E(θi) of each BSDF from its ``sample()`` weights, with the standard errors:
+        [(means, errors)] over ``thetas_deg`` (the channels' mean)."""
+        from ..checks.albedo import albedo_sampled
+
+        out = []
+        for entry in self.entries:
+            rows = [albedo_sampled(entry.bsdf, math.radians(t), n=n) for t in thetas_deg]
+            out.append((np.array([m.mean() for m, _ in rows]),
+                        np.array([e.mean() for _, e in rows])))
+        return out
