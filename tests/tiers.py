@@ -207,6 +207,9 @@ SLOW = {
         "test08_flags_traverse_and_gradient": DEEP,
         "test10_stability": DEEP,
     },
+    "tests/explore/test_page.py": {
+        "test04_the_server_serves_and_stops_on_sigterm": WHOLE,
+    },
     "tests/plugins/test_cooktorrance_film.py": {
         "test06_compensated_white_furnace_with_a_film": DEEP,
         "test07_gradient_through_the_thickness": DEEP,
