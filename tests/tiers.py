@@ -215,11 +215,13 @@ SLOW = {
         "test07_gradient_through_the_thickness": DEEP,
         "test08_rgb_gradient_through_the_film_index": DEEP,
         "test10_compensated_dielectric_white_furnace_with_a_film": (MORE, [
-            "llvm_ad_rgb-60.0", "llvm_ad_rgb-120.0", "llvm_ad_spectral-*"]),
+            "llvm_ad_rgb-60.0", "llvm_ad_rgb-180.0", "llvm_ad_rgb-120.0",
+            "llvm_ad_spectral-*"]),
+        "test12_compensated_dielectric_with_a_film_is_reciprocal": DEEP,
         "test11_compensated_dielectric_with_a_film_samples_its_pdf": DEEP,
         "test13_compensated_dielectric_gradients": DEEP,
         "test14_compensated_dielectric_with_a_film_in_every_variant": (MORE, [
-            "scalar_spectral", "llvm_ad_spectral", "llvm_ad_mono"]),
+            "llvm_ad_rgb", "scalar_spectral", "llvm_ad_spectral", "llvm_ad_mono"]),
     },
     "tests/plugins/test_cooktorrance_multiscatter.py": {
         "test01_a_table_slice_rebuilds": (MORE, ["beckmann-vcavity-40"]),
