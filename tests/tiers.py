@@ -579,6 +579,7 @@ SLOW = {
             "phong", "cooktorrance", "ward", "orennayar", "ashikhmin", "lafortune",
             "cooktorrance-multiscatter", "he"]),
         "test03_blinn_phong_against_walters_mapping": DEEP,
+        "test18_a_films_thickness_is_fitted": DEEP,
         "test04_schlick_r0_against_gold": DEEP,
         "test05_fitted_spec_is_written_as_the_spec_takes_it": DEEP,
         "test06_deterministic": DEEP,

@@ -11,19 +11,24 @@ import signal
 import socket
 import subprocess
 import sys
-import time
 import urllib.request
 
 import numpy as np
 import pytest
 
-pn = pytest.importorskip("panel")
-param = pytest.importorskip("param")
+
+@pytest.fixture
+def pn():
+    """Panel, where the explore extra is installed (imported by the tests that use it: the
+    import takes seconds, which a worker that runs none of them should not pay)."""
+    return pytest.importorskip("panel")
 
 GOLD = "cooktorrance alpha=0.3 material=Au"
 
 
 def _parts(page):
+    import panel as pn
+
     """(the sliders by name, the polar plot's first data source, the XML pane, the message)."""
     sliders = {w.label: w for column in page[2] for w in getattr(column, "objects", [])
                if isinstance(w, pn.widgets.FloatSlider)}
@@ -33,11 +38,13 @@ def _parts(page):
 
 def _move(slider, value):
     """What the browser does when a slider is released."""
+    import param
+
     with param.edit_constant(slider):
         slider.value_throttled = value
 
 
-def test01_a_slider_moves_the_views_and_the_xml(variant_llvm_ad_rgb):
+def test01_a_slider_moves_the_views_and_the_xml(variant_llvm_ad_rgb, pn):
     from mi_brdfs.explorer.app import build
 
     page = build([GOLD])
@@ -50,7 +57,7 @@ def test01_a_slider_moves_the_views_and_the_xml(variant_llvm_ad_rgb):
     assert not message.visible
 
 
-def test02_a_refused_value_is_shown_on_the_page(variant_llvm_ad_rgb):
+def test02_a_refused_value_is_shown_on_the_page(variant_llvm_ad_rgb, pn):
     """η's red channel moved to 0 is refused by cooktorrance (η must be > 0): its message on
     the page, the views and the XML as they were."""
     from mi_brdfs.explorer.app import build
@@ -65,7 +72,7 @@ def test02_a_refused_value_is_shown_on_the_page(variant_llvm_ad_rgb):
     assert xml.object == text
 
 
-def test03_two_pages_keep_their_own_state(variant_llvm_ad_rgb):
+def test03_two_pages_keep_their_own_state(variant_llvm_ad_rgb, pn):
     from mi_brdfs.explorer.app import build
 
     a, b = build([GOLD]), build([GOLD])
@@ -86,7 +93,7 @@ def _explore(*args):
                             env=dict(os.environ, MI_BRDFS_NO_PROGRESS="1"))
 
 
-def test04_the_server_serves_and_stops_on_sigterm(variant_llvm_ad_rgb):
+def test04_the_server_serves_and_stops_on_sigterm(variant_llvm_ad_rgb, pn):
     """The page answers 200 on 127.0.0.1 at the port printed; SIGTERM stops the server within
     5 s with exit status 0."""
     port = _free_port()
@@ -102,7 +109,7 @@ def test04_the_server_serves_and_stops_on_sigterm(variant_llvm_ad_rgb):
         proc.kill()
 
 
-def test05_bad_input_ends_in_one_line_before_any_server(variant_llvm_ad_rgb, capsys):
+def test05_bad_input_ends_in_one_line_before_any_server(variant_llvm_ad_rgb, pn, capsys):
     """A port in use, an unknown plugin, five BSDFs, a scalar variant: one line each on
     stderr, exit status 2, nothing on stdout (no server started)."""
     from mi_brdfs.cli import main
