@@ -466,25 +466,23 @@ def cmd_presets(args) -> int:
 
 
 def cmd_explore(args) -> int:
-    import mi_brdfs
     from ..errors import MiBrdfsError
 
     try:
         import panel  # noqa: F401
     except ImportError:
         raise MiBrdfsError("explore needs Panel: pip install 'mi-brdfs[explore]'") from None
+    from ..explorer import jit_variant
     from ..explorer.server import LOCALHOST, free_port, serve
     from ..explorer.session import MAX_BSDFS
 
-    variant = mi_brdfs.use_variant(args.variant)
-    if not variant.startswith(("llvm", "cuda")):
-        raise MiBrdfsError(f"explore needs a JIT variant (llvm_*, cuda_*), not {variant}")
+    jit_variant(args.variant)
     if len(args.bsdf) > MAX_BSDFS:
         raise MiBrdfsError(f"explore: at most {MAX_BSDFS} BSDFs, got {len(args.bsdf)}")
     specs = _bsdfs(args.bsdf)
     host = args.host or LOCALHOST
-    free_port(host, args.port)  # a port in use ends here, before the server starts
-    return serve(specs, args.port, host, browser=not args.no_browser)
+    port = free_port(host, args.port)  # a port in use ends here, before the server starts
+    return serve(specs, port, host, browser=not args.no_browser)
 
 
 def cmd_info(args) -> int:

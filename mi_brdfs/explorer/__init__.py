@@ -8,6 +8,18 @@ it). Needs the ``explore`` extra: ``pip install 'mi-brdfs[explore]'``.
 from __future__ import annotations
 
 
+def jit_variant(variant: str | None) -> str:
+    """Set ``variant`` (None: llvm_ad_rgb where LLVM works) and return it; MiBrdfsError with
+    one line where it is not a JIT variant (the explorer traces its views' kernels once)."""
+    from ..errors import MiBrdfsError
+    from ..registry import use_variant
+
+    variant = use_variant(variant)
+    if not variant.startswith(("llvm", "cuda")):
+        raise MiBrdfsError(f"explore needs a JIT variant (llvm_*, cuda_*), not {variant}")
+    return variant
+
+
 def explore(*bsdfs, variant: str | None = None):
     """
     The explorer of 1 to 4 BSDFs (any form: dict, XML fragment or file, 'type key=value',
@@ -15,14 +27,7 @@ def explore(*bsdfs, variant: str | None = None):
     Jupyter cell (after ``panel.extension()``), or served with ``.show()``. Loads them in
     ``variant`` (default: llvm_ad_rgb where LLVM works).
     """
-    from ..bsdfspec import parse_cli
-    from ..errors import MiBrdfsError
-    from ..registry import use_variant
     from .app import build
 
-    variant = use_variant(variant)
-    if not variant.startswith(("llvm", "cuda")):
-        raise MiBrdfsError(f"explore needs a JIT variant (llvm_*, cuda_*), not {variant}")
-    specs = [s for b in bsdfs for s in (parse_cli([b]) if isinstance(b, str) and
-                                          not b.lstrip().startswith("<") else [b])]
-    return build(specs)
+    jit_variant(variant)
+    return build(list(bsdfs))

@@ -29,7 +29,7 @@ ALBEDO_THETAS = tuple(float(t) for t in np.linspace(0.0, 85.0, 18))
 ALBEDO_SAMPLES = 20_000
 
 
-def _slider(pn, entry, control, i: int, on_change):
+def _slider(pn, entry, control, on_change):
     """The slider(s) of one control: a number (log₁₀ where ``control.log``), or r, g, b."""
     def make(name, value, index):
         lo, hi, v = control.lo, control.hi, value
@@ -121,9 +121,9 @@ def build(specs, theta_i: float = 30.0):
     redraw_albedo()
     redraw_xml()
     columns = []
-    for i, entry in enumerate(session.entries):
+    for entry in session.entries:
         widgets = [w for c in entry.controls.values()
-                   for w in _slider(pn, entry, c, i, on_change)]
+                   for w in _slider(pn, entry, c, on_change)]
         columns.append(pn.Column(pn.pane.Markdown(f"### {entry.name}"), *widgets))
     page = pn.Column(
         pn.pane.Markdown("# mi-brdfs explore"), message,

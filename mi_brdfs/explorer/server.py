@@ -28,14 +28,14 @@ def free_port(host: str, port: int | None) -> int:
         return s.getsockname()[1]
 
 
-def serve(specs, port: int | None = None, host: str = LOCALHOST, browser: bool = True,
+def serve(specs, port: int, host: str = LOCALHOST, browser: bool = True,
           out=sys.stdout) -> int:
-    """Serve the explorer of ``specs`` (checked already) until Ctrl-C or SIGTERM; 0."""
+    """Serve the explorer of ``specs`` (checked already) on ``port`` (:func:`free_port`)
+    until Ctrl-C or SIGTERM; 0."""
     import panel as pn
 
     from .app import build
 
-    port = free_port(host, port)
     url = f"http://{'localhost' if host == LOCALHOST else host}:{port}/"
     origins = [f"{h}:{port}" for h in ("localhost", LOCALHOST, host)]
     server = pn.serve({"/": lambda: build(specs)}, port=port, address=host,

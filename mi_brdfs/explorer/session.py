@@ -130,44 +130,32 @@ class Entry:
         """Where the BSDF was given as a dict, the plugin's own checks of the new value: the
         dict with it is loaded (and dropped), and what the plugin refuses is raised in its
         own words (``mi.traverse`` updates are not checked by every plugin)."""
-        if not isinstance(self.spec, dict) or "." in control.label:
-            return
-        spec = self.as_dict()
-        spec[control.label] = {"type": "rgb", "value": numbers} if control.channels == 3 \
-            else numbers[0]
-        if control.label in ("eta", "k"):
-            spec.pop("material", None)
-            for other in ("eta", "k"):  # material gave both: the other keeps its value
-                if other != control.label and other not in spec and other in self.values():
-                    v = self.values()[other]
-                    spec[other] = {"type": "rgb", "value": list(v)} \
-                        if isinstance(v, tuple) else v
-        load_bsdf(spec)
+        if isinstance(self.spec, dict) and "." not in control.label:
+            value = numbers[0] if control.channels == 1 else tuple(numbers)
+            load_bsdf(self.as_dict({control.label: value}))
 
     def values(self) -> dict:
         """The controls' current values by label."""
         return {c.label: c.value for c in self.controls.values()}
 
-    def as_dict(self) -> dict | None:
-        """The spec as a ``mi.load_dict`` dict with the parameters set since loading, where
-        it was given as a dict or a command line (else None: the XML fragment it was given as
-        is shown as it is). A colour is an ``rgb`` object; a parameter set over what gave it
-        (an index over ``material``) replaces it."""
+    def as_dict(self, pending: dict | None = None) -> dict | None:
+        """The spec as a ``mi.load_dict`` dict with the parameters set since loading (and the
+        ``pending`` values by label), where it was given as a dict or a command line (else
+        None: the XML fragment it was given as is shown as it is). A colour is an ``rgb``
+        object; an index set over ``material`` replaces it, the other index keeping the
+        material's value."""
         if not isinstance(self.spec, dict):
             return None
-        out = dict(self.spec)
-        for label in sorted(self.changed):
-            if "." in label:  # a nested object's parameter: not a key of this dict
-                continue
-            value = self.values()[label]
+        values = dict(self.values(), **(pending or {}))
+        changed = {label for label in self.changed | set(pending or ()) if "." not in label}
+        if changed & {"eta", "k"} and "material" in self.spec:
+            changed |= {"eta", "k"} & set(values)
+        out = {k: v for k, v in self.spec.items() if not (k == "material" and
+                                                          changed & {"eta", "k"})}
+        for label in sorted(changed):  # a nested object's parameter is no key of this dict
+            value = values[label]
             out[label] = {"type": "rgb", "value": list(value)} \
                 if isinstance(value, tuple) else value
-            if label in ("eta", "k") and out.pop("material", None) is not None:
-                other = "k" if label == "eta" else "eta"
-                if other not in self.changed and other in self.values():
-                    v = self.values()[other]
-                    out[other] = {"type": "rgb", "value": list(v)} \
-                        if isinstance(v, tuple) else v
         return out
 
     def xml(self) -> str:
