@@ -49,7 +49,7 @@ class MicrofacetReflection(lobes.Lobe):
                  specular, flags, table=None, film=None):
         self.film = film
         #: the film's colour tabulated where it can be (RGB and mono variants)
-        self.film_table = None if film is None else film.tabulate([(1.0, eta, k)])
+        self.film_table = None if film is None else film.tabulate(eta, k)
         self.distribution_kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
         self.masking, self.sample_visible = microfacet.MASKING[masking], sample_visible
         self.fresnel, self.fresnel_term = fresnel, FRESNEL_TERMS[fresnel]

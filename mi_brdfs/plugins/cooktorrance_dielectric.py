@@ -54,7 +54,7 @@ class MicrofacetInterface(lobes.Lobe):
         self.n1_max = max(1.0, value)
         #: the film's colour from outside, tabulated where it can be (from inside it is the
         #: same at Snell's image of the cosine: :meth:`reflectance`)
-        self.film_table = None if film is None else film.tabulate([(1.0, eta, 0.0)])
+        self.film_table = None if film is None else film.tabulate(eta, 0.0)
         self.distribution_kind, self.alpha_u, self.alpha_v = kind, alpha_u, alpha_v
         self.sample_visible, self.flags = sample_visible, flags
         # the relative index both ways (opaque: a changed η updates the kernel's inputs)
@@ -234,7 +234,7 @@ class MicrofacetInterface(lobes.Lobe):
             cos_out2 = 1.0 - dr.square(self.eta) * (1.0 - dr.square(cos))
             total = (cos_im < 0.0) & (cos_out2 <= 0.0)
             args = (si, dr.select(outside, cos, dr.safe_sqrt(cos_out2)), 1.0, self.eta, 0.0,
-                    active, self.n1_max, self.film_table, 0)
+                    active, self.n1_max, self.film_table)
         if pick:
             return dr.select(total, 1.0, self.film.mean_reflectance(*args))
         F = dr.select(total, 1.0, self.film.reflectance(*args))
@@ -280,7 +280,7 @@ class MicrofacetInterface(lobes.Lobe):
             return self.film_deltas
         return self.film_shift.deltas(
             lambda c: self.film.reflectance(si, c, 1.0, self.eta, 0.0, active, self.n1_max,
-                                            self.film_table, 0), self.eta, constant)
+                                            self.film_table), self.eta, constant)
 
     def shares(self, si, active):
         """(x_above, x_below): the compensation's refracted share lit from each side

@@ -59,10 +59,10 @@ class Film:
         self.eta_min = 0.0 if rng is None else rng[0]
         self.sensitivity = None if mi.is_spectral else thinfilm.Sensitivity()
 
-    def tabulate(self, sides):
+    def tabulate(self, base_eta, base_k):
         """
-        A :class:`~mi_brdfs.scattering.thinfilm_table.ColourTable` of the film's colour for
-        each side light comes from, ``sides`` = [(n1, base η, base k)] (numbers or textures),
+        A :class:`~mi_brdfs.scattering.thinfilm_table.ColourTable` of the film's colour lit
+        from outside over a base of index ``base_eta`` + i``base_k`` (numbers or textures),
         where everything it depends on is known at load in an RGB or mono variant: the base's
         and the film's indices constant, the thickness's range known and within the table's
         reach, and neither an index nor the thickness differentiated (``mi.traverse`` with a
@@ -73,23 +73,18 @@ class Film:
         rng, eta = properties.texture_range(self.thickness), properties.texture_range(self.eta)
         if self.sensitivity is None or rng is None or eta is None or eta[0] != eta[1] or \
                 self.eta.is_spatially_varying() or \
-                properties.differentiated([self.eta, self.thickness] + [v for side in sides
-                                                              for v in side]):
+                properties.differentiated([self.eta, self.thickness, base_eta, base_k]):
             return None
         n2 = eta[0]
         if rng[1] * n2 / thinfilm_table.OPTICAL_STEP > thinfilm_table.MAX_NODES:
             return None
         uniform = rng[0] == rng[1] and not self.thickness.is_spatially_varying()
-        tables = []
-        for n1, base_eta, base_k in sides:
-            base = [_channels(v, self.sensitivity.channels) for v in (base_eta, base_k)]
-            if base[0] is None or base[1] is None:
-                return None
-            index = tuple(complex(e, k) for e, k in zip(*base))
-            n1 = float(np.asarray(n1, np.float64).ravel()[0])
-            tables.append(thinfilm_table.build(self.sensitivity.channels, n1, n2, index,
-                                               rng[1], uniform))
-        return thinfilm_table.ColourTable(tables, n2)
+        base = [_channels(v, self.sensitivity.channels) for v in (base_eta, base_k)]
+        if base[0] is None or base[1] is None:
+            return None
+        index = tuple(complex(e, k) for e, k in zip(*base))
+        return thinfilm_table.ColourTable(
+            thinfilm_table.build(self.sensitivity.channels, 1.0, n2, index, rng[1], uniform), n2)
 
     def _at(self, si, active):
         """(thickness, film index) at ``si``, clipped into range."""
@@ -97,24 +92,23 @@ class Film:
         n2 = properties.clip(self.eta.eval_1(si, active), 1e-4, FILM_ETA_MAX)
         return d, n2
 
-    def reflectance(self, si, cos1, n1, eta3, k3, active, n1_max: float = 1.0, table=None,
-                    side=0):
+    def reflectance(self, si, cos1, n1, eta3, k3, active, n1_max: float = 1.0, table=None):
         """The film's unpolarized reflectance per channel (``mi.UnpolarizedSpectrum``) at
         incidence cosine ``cos1`` from the medium ``n1`` (1 outside, the base's η inside, at
-        most ``n1_max``) over ``eta3`` + i``k3`` (per channel, or one Float); from the
-        ``side`` of :meth:`tabulate`'s ``table`` where there is one."""
+        most ``n1_max``) over ``eta3`` + i``k3`` (per channel, or one Float); from
+        :meth:`tabulate`'s ``table`` where there is one (lit from outside: n1 = 1)."""
         if table is not None:
             d = None if table.uniform else self._at(si, active)[0]
-            return mi.UnpolarizedSpectrum(table(side, cos1, d))
+            return mi.UnpolarizedSpectrum(table(cos1, d))
         d, n2 = self._at(si, active)
         return self._reflectance(si, cos1, n1, eta3, k3, d, n2, n1_max)
 
     def mean_reflectance(self, si, cos1, n1, eta3, k3, active, n1_max: float = 1.0,
-                         table=None, side=0):
+                         table=None):
         """The mean over the channels of :meth:`reflectance` (from the table alone where
         there is one: a quarter of its reads)."""
         if table is not None:
-            return table.mean(side, cos1, None if table.uniform else self._at(si, active)[0])
+            return table.mean(cos1, None if table.uniform else self._at(si, active)[0])
         return dr.mean(self.reflectance(si, cos1, n1, eta3, k3, active, n1_max))
 
     def _reflectance(self, si, cos1, n1, eta3, k3, d, n2, n1_max):

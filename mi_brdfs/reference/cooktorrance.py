@@ -343,7 +343,7 @@ class RoughDielectric:
             keep = cih > 0
             h, weights, cih = h[keep], weights[keep], cih[keep]
             ws = np.broadcast_to(w, h.shape)
-            f = fresnel_exact(cih, eta, 0.0)[:, 0]
+            f = self._fresnel(-cih if inside else cih)
             common = weights * ndf(self.distribution, self.alpha, h) * cih * \
                 self._g1(ws, h) / w[2]
             wo_r = 2 * cih[:, None] * h - ws

@@ -108,34 +108,34 @@ def build(channels: int, n1: float, n2: float, base: tuple, d_max: float,
 
 
 class ColourTable:
-    """Tables of :func:`build` (one per incidence side) in the current variant, looked up
-    bilinearly: ``table(which, cos1, d)`` → [R_c per channel]; linearly in the cosine alone
-    where the tables hold one thickness (:attr:`uniform`: ``d`` is then not read)."""
+    """A table of :func:`build` in the current variant, looked up bilinearly:
+    ``table(cos1, d)`` → [R_c per channel]; linearly in the cosine alone where it holds one
+    thickness (:attr:`uniform`: ``d`` is then not read)."""
 
-    def __init__(self, tables: list, n2: float):
+    def __init__(self, table: np.ndarray, n2: float):
         self.step = OPTICAL_STEP / n2
-        self.n_d, self.channels = tables[0].shape[1], tables[0].shape[2]
+        self.n_d, self.channels = table.shape[1], table.shape[2]
         self.uniform = self.n_d == 1
-        flat = np.zeros((len(tables), N_COS, self.n_d, 4))
-        flat[..., :self.channels] = np.stack(tables)
-        flat[..., 3] = np.stack(tables).mean(axis=-1)  # the channels' mean, read alone
+        flat = np.zeros((N_COS, self.n_d, 4))
+        flat[..., :self.channels] = table
+        flat[..., 3] = table.mean(axis=-1)  # the channels' mean, read alone
         if dr.is_jit_v(mi.Float):
             self.table = mi.Float(flat.ravel().astype(np.float32))
             dr.make_opaque(self.table)
         else:
             self.table = flat.reshape(-1, 4)
 
-    def __call__(self, which, cos1, d=None):
-        return self._lookup(which, cos1, d, None)
+    def __call__(self, cos1, d=None):
+        return self._lookup(cos1, d, None)
 
-    def mean(self, which, cos1, d=None):
+    def mean(self, cos1, d=None):
         """The channels' mean alone (a quarter of the reads): what a choice between
         reflection and refraction needs."""
-        return self._lookup(which, cos1, d, 3)
+        return self._lookup(cos1, d, 3)
 
-    def _lookup(self, which, cos1, d, slot):
+    def _lookup(self, cos1, d, slot):
         """[R_c per channel], or the number ``slot`` of the nodes alone."""
-        base, tu, tv = self._cell(which, cos1, d)
+        base, tu, tv = self._cell(cos1, d)
         rows = (0, self.n_d) if self.uniform else (0, 1, self.n_d, self.n_d + 1)
         g = [self._at(base + o, slot) for o in rows]
         if slot is not None:
@@ -147,17 +147,17 @@ class ColourTable:
                    for c in range(len(g[0]))]
         return out[0] if slot is not None else out[:self.channels]
 
-    def _cell(self, which, cos1, d):
+    def _cell(self, cos1, d):
         """(the first node's index, the fractions in cosθ and in thickness)."""
         u = dr.clip(cos1, 0.0, 1.0) * (N_COS - 1)
         i = dr.minimum(mi.UInt32(u), N_COS - 2)
         tu = u - mi.Float(i)
         if self.uniform:
-            return (which * N_COS + i), tu, None
+            return i, tu, None
         v = dr.clip(d / self.step, 0.0, self.n_d - 1.0)
         j = dr.minimum(mi.UInt32(v), self.n_d - 2)
         tv = v - mi.Float(j)
-        return (which * N_COS + i) * self.n_d + j, tu, tv
+        return i * self.n_d + j, tu, tv
 
     def _at(self, index, slot=None):
         """A node's four numbers, or its number ``slot`` alone."""
