@@ -208,7 +208,8 @@ SLOW = {
         "test10_stability": DEEP,
     },
     "tests/explore/test_page.py": {
-        "test04_the_server_serves_and_stops_on_sigterm": WHOLE,
+        "test05_the_server_serves_and_stops_on_sigterm": WHOLE,
+        "test07_the_fit_button_fits_the_second_bsdf": WHOLE,
     },
     "tests/plugins/test_cooktorrance_film.py": {
         "test06_compensated_white_furnace_with_a_film": DEEP,

@@ -3,6 +3,9 @@
 #   - libLLVM >= 17 for the LLVM (JIT) variants: Debian 12's default LLVM 15 aborts inside the JIT.
 #     We install libllvm19, which is known to work.
 #   - libatomic.so.1: without it `import drjit` fails with a misleading NameError.
+# and what the browser test of `mi-brdfs explore` drives (tests/explore/test_browser.py):
+#   - Debian's headless Chromium and its ChromeDriver (/usr/bin/chromium, /usr/bin/chromedriver),
+#     so that Selenium never downloads a browser; without them that test is skipped.
 # Installs them with apt-get when run as root (or with password-less sudo); otherwise it says what
 # to install and carries on: mi_brdfs then falls back to the scalar_rgb variant.
 set -u
@@ -29,18 +32,28 @@ have_atomic() {
 missing=""
 have_llvm || missing="$missing libllvm19"
 have_atomic || missing="$missing libatomic1"
+[ -z "$missing" ] || lib="$missing"
+browser=""
+[ -x /usr/bin/chromium ] || browser="$browser chromium"
+[ -x /usr/bin/chromedriver ] || browser="$browser chromium-driver"
+missing="$missing$browser"
 [ -z "$missing" ] && exit 0
 
+# what goes without the missing packages, in one line
+consequence() {
+  [ -n "${lib:-}" ] && printf 'mi_brdfs uses the scalar_rgb variant' && [ -n "$browser" ] && printf '; '
+  [ -n "$browser" ] && printf 'the browser test of mi-brdfs explore is skipped'
+  echo
+}
+
 if ! command -v apt-get >/dev/null 2>&1; then
-  echo "setup: please install$missing (LLVM >= 17 and libatomic) with your package manager;"
-  echo "setup: until then mi_brdfs uses the scalar_rgb variant"
+  echo "setup: please install$missing with your package manager; until then $(consequence)"
   exit 0
 fi
 if [ "$(id -u)" -eq 0 ]; then SUDO=""
 elif command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then SUDO="sudo -n"
 else
-  echo "setup: not root: run 'sudo apt-get install$missing' for the LLVM variants;"
-  echo "setup: until then mi_brdfs uses the scalar_rgb variant"
+  echo "setup: not root: run 'sudo apt-get install$missing'; until then $(consequence)"
   exit 0
 fi
 echo "setup: installing$missing"
@@ -48,6 +61,6 @@ export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get install -y -q --no-install-recommends $missing >/dev/null 2>&1 || {
   $SUDO apt-get update -q >/dev/null 2>&1
   $SUDO apt-get install -y -q --no-install-recommends $missing >/dev/null || \
-    echo "setup: apt-get could not install$missing; mi_brdfs will use the scalar_rgb variant"
+    echo "setup: apt-get could not install$missing; until then $(consequence)"
 }
 exit 0

@@ -30,16 +30,19 @@ class Switch:
     states: tuple                   # every state it has, the default first
     state: Callable[[dict], str]    # the state a configuration's spec puts it in
     default_only: str | None = None  # why the grid leaves it at its default (None: varied)
+    menu: tuple = ()                # the values a scene gives it, where it is one option
 
 
 def boolean(name: str, default: bool, selects: str, why: str | None = None) -> Switch:
     def state(spec):
         return str(bool(spec.get(name, default))).lower()
-    return Switch(name, selects, (str(default).lower(), str(not default).lower()), state, why)
+    return Switch(name, selects, (str(default).lower(), str(not default).lower()), state, why,
+                  (default, not default))
 
 
 def choice(name: str, options: tuple, selects: str, why: str | None = None) -> Switch:
-    return Switch(name, selects, options, lambda spec: str(spec.get(name, options[0])), why)
+    return Switch(name, selects, options, lambda spec: str(spec.get(name, options[0])), why,
+                  options)
 
 
 def nonzero(name: str, selects: str, why: str | None = None) -> Switch:

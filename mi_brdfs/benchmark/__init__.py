@@ -10,8 +10,8 @@ are reported met or missed in the report's summary.
 
 def sections() -> list:
     """The report's sections, in order."""
-    from . import (backends, earth, error_time, he, hk, measured, models, precision, strategies,
-                   thinfilm, user_scene)
+    from . import (backends, earth, error_time, explore, he, hk, measured, models, precision,
+                   strategies, thinfilm, user_scene)
     return [backends.section, error_time.section, strategies.section, measured.section,
             he.section, earth.section, hk.section, thinfilm.section, models.section,
-            precision.section, user_scene.section]
+            precision.section, user_scene.section, explore.section]

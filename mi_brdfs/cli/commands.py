@@ -472,17 +472,24 @@ def cmd_explore(args) -> int:
         import panel  # noqa: F401
     except ImportError:
         raise MiBrdfsError("explore needs Panel: pip install 'mi-brdfs[explore]'") from None
-    from ..explorer import jit_variant
+    from ..explorer import _scene, jit_variant
+    from ..explorer.app import spheres
     from ..explorer.server import LOCALHOST, free_port, serve
-    from ..explorer.session import MAX_BSDFS
+    from ..explorer.session import MAX_BSDFS, Session
 
     jit_variant(args.variant)
     if len(args.bsdf) > MAX_BSDFS:
         raise MiBrdfsError(f"explore: at most {MAX_BSDFS} BSDFs, got {len(args.bsdf)}")
     specs = _bsdfs(args.bsdf)
+    scene = _scene(args.scene, args.scene_bsdf)
     host = args.host or LOCALHOST
     port = free_port(host, args.port)  # a port in use ends here, before the server starts
-    return serve(specs, port, host, browser=not args.no_browser)
+    # the BSDFs (and the scene) load here, so that what the plugins refuse ends in one line
+    # before the server starts
+    bsdfs = [e.bsdf for e in Session(specs).entries]
+    if scene is not None:
+        spheres(bsdfs, scene, None)
+    return serve(specs, port, host, browser=not args.no_browser, scene=scene)
 
 
 def cmd_info(args) -> int:

@@ -490,13 +490,19 @@ def _add_explore(sub) -> None:
     """``mi-brdfs explore``."""
     e = _bsdf_command(sub, "explore", "an interactive BRDF explorer in the browser",
                       "Serve a page on 127.0.0.1 that shows up to four BSDFs computed by their "
-                      "own eval and sample (polar plot, albedo, their XML), with a slider for "
-                      "each parameter mi.traverse exposes; opens the browser. Ctrl-C stops. "
+                      "own eval, pdf and sample (polar plot, albedo, 3-D lobe, (θh, θd) slice, "
+                      "sampling density, progressively rendered spheres, verdicts, their XML "
+                      "and Python), with a slider for each parameter mi.traverse exposes and a "
+                      "menu for each switch; opens the browser. Ctrl-C stops. "
                       "Needs the explore extra: pip install 'mi-brdfs[explore]'.")
     e.add_argument("--port", type=_port, help="the port (default: a free one)")
     e.add_argument("--host", metavar="ADDRESS",
                    help="listen on this address instead of 127.0.0.1 (others can reach it)")
     e.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    e.add_argument("--scene", metavar="SCENE",
+                   help="render this scene file (or bundled scene) instead of the sphere, "
+                        "with each BSDF in place of the one --scene-bsdf names")
+    e.add_argument("--scene-bsdf", metavar="ID", help="the id of the scene's BSDF to replace")
     e.set_defaults(func=cmd_explore)
 
 

@@ -20,14 +20,27 @@ def jit_variant(variant: str | None) -> str:
     return variant
 
 
-def explore(*bsdfs, variant: str | None = None):
+def explore(*bsdfs, variant: str | None = None, scene=None, scene_bsdf: str | None = None):
     """
     The explorer of 1 to 4 BSDFs (any form: dict, XML fragment or file, 'type key=value',
     a MERL file, a preset) as a Panel layout: shown inline as the last expression of a
     Jupyter cell (after ``panel.extension()``), or served with ``.show()``. Loads them in
-    ``variant`` (default: llvm_ad_rgb where LLVM works).
+    ``variant`` (default: llvm_ad_rgb where LLVM works). ``scene``: a scene file (or a
+    bundled scene's name) rendered instead of the sphere, each BSDF in place of its
+    ``<bsdf id=scene_bsdf>``.
     """
     from .app import build
 
     jit_variant(variant)
-    return build(list(bsdfs))
+    return build(list(bsdfs), scene=_scene(scene, scene_bsdf))
+
+
+def _scene(scene, scene_bsdf):
+    """(scene, id) where a scene is given; MiBrdfsError with one line where only one of the
+    two is."""
+    from ..errors import MiBrdfsError
+
+    if (scene is None) != (scene_bsdf is None):
+        raise MiBrdfsError("explore: a scene needs the id of the BSDF to replace in it "
+                           "(--scene FILE --scene-bsdf ID), and an id its scene")
+    return None if scene is None else (str(scene), scene_bsdf)

@@ -1,51 +1,45 @@
 """
 The page of ``mi-brdfs explore`` (Panel on Bokeh: a Python web-visualisation library that
-serves the same layout from a command and inside a Jupyter notebook, with no JavaScript of
-ours). One :func:`build` per browser session: each has its own
-:class:`~mi_brdfs.explorer.session.Session`, so two browsers never share a BSDF's state.
+serves the same layout from a command and inside a Jupyter notebook, with no JavaScript
+framework of ours). One :func:`build` per browser session: each has its own
+:class:`Explorer` (its own :class:`~mi_brdfs.explorer.session.Session`), so two browsers
+never share a BSDF's state.
 
-The controls are generated from the BSDFs (:func:`~mi_brdfs.explorer.session.controls`): a
-slider per number (over log₁₀ of it where its range spans decades), three per colour; a value
-the plugin refuses is shown on the page in its own words, and the BSDF keeps its last good
-value. Views: the polar plot in the plane of incidence (f·cosθo, linear or log) and the albedo
-E(θi) from ``sample()`` with its standard error band; the XML fragment of each BSDF as it is
-now.
+The controls are generated from the BSDFs: a slider per number (over log₁₀ where its range
+spans decades) or three per colour, a field to type a value in the parameter's units, a menu
+per configuration switch. A value the plugin refuses is shown on the page in its own words,
+and the BSDF keeps its last good value. The views (polar plot, albedo, 3-D lobe, (θh, θd)
+slice, sampling density, spheres) are computed by the BSDFs' own ``eval``/``pdf``/``sample``;
+a parameter change recomputes the views of that BSDF only, then the spheres' first pass; the
+verdicts, the cost per sample and further passes of the spheres follow on a timer, so the
+page answers between them.
 """
 
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
 from ..errors import MiBrdfsError
+from . import views
+from .figures import COLOURS, Figures
 from .session import Session
-
-#: One colour per BSDF, in the order given (Bokeh's Category10).
-COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728")
 
 #: The albedo view's incident angles (degrees) and samples per angle.
 ALBEDO_THETAS = tuple(float(t) for t in np.linspace(0.0, 85.0, 18))
-ALBEDO_SAMPLES = 20_000
+ALBEDO_SAMPLES = 4096
 
+#: The spheres' resolution, and the passes after which they stop refining.
+SPHERE_RES = 64
+SPHERE_PASSES = 64
 
-def _slider(pn, entry, control, on_change):
-    """The slider(s) of one control: a number (log₁₀ where ``control.log``), or r, g, b."""
-    def make(name, value, index):
-        lo, hi, v = control.lo, control.hi, value
-        if control.log:
-            lo, hi, v = math.log10(lo), math.log10(hi), math.log10(max(v, control.lo))
-        step = (hi - lo) / 200.0
-        widget = pn.widgets.FloatSlider(label=name, start=lo, end=hi, value=min(max(v, lo), hi),
-                                        step=step, format="0.000")
-        widget.param.watch(lambda event: on_change(entry, control, index, event.new),
-                           "value_throttled")
-        return widget
-    if control.channels == 1:
-        name = f"{control.label} (log₁₀)" if control.log else control.label
-        return [make(name, control.value, None)]
-    return [make(f"{control.label} {c}", v, k) for k, (c, v) in
-            enumerate(zip("rgb", control.value))]
+#: The timer of the spheres' passes and the verdicts (milliseconds).
+TICK_MS = 150
+
+#: The fit button's effort: direction pairs and Adam steps (``mi-brdfs fit``'s are larger).
+FIT_PAIRS, FIT_STEPS = 4096, 200
 
 
 def _value(control, index, new):
@@ -58,76 +52,334 @@ def _value(control, index, new):
     return tuple(values)
 
 
-def build(specs, theta_i: float = 30.0):
-    """The page for ``specs`` (1 to 4 BSDFs, any form), in the current (JIT) variant."""
-    import panel as pn
-    from bokeh.models import ColumnDataSource
-    from bokeh.plotting import figure
+def _typed(text: str):
+    """A typed value: a number, or three comma-separated numbers (a colour); else the text
+    (which the session refuses in one line)."""
+    parts = [p.strip() for p in str(text).strip("()[] ").split(",")]
+    try:
+        numbers = [float(p) for p in parts]
+    except ValueError:
+        return text
+    return numbers[0] if len(numbers) == 1 else tuple(numbers)
 
-    session = Session(specs)
-    state = {"theta_i": theta_i, "log": False}
-    message = pn.pane.Alert("", alert_type="danger", visible=False)
-    xml = pn.pane.Markdown("")
-    polar_sources = [ColumnDataSource(dict(x=[], y=[])) for _ in session.entries]
-    albedo_sources = [ColumnDataSource(dict(t=[], e=[], lo=[], hi=[])) for _ in session.entries]
 
-    polar = figure(title="f·cosθo in the plane of incidence", width=460, height=300,
-                   match_aspect=True, x_axis_label="", y_axis_label="")
-    albedo = figure(title="albedo E(θi) from sample() (± 2 SE)", width=460, height=300,
-                    x_axis_label="θi (degrees)", y_axis_label="E", y_range=(0.0, 1.1))
-    for entry, src, asrc, colour in zip(session.entries, polar_sources, albedo_sources, COLOURS):
-        polar.line("x", "y", source=src, color=colour, legend_label=entry.name, line_width=2)
-        albedo.line("t", "e", source=asrc, color=colour, legend_label=entry.name, line_width=2)
-        albedo.varea("t", "lo", "hi", source=asrc, color=colour, alpha=0.2)
+def _shown(value) -> str:
+    if isinstance(value, tuple):
+        return ", ".join(f"{v:.4g}" for v in value)
+    return f"{value:.4g}"
 
-    def redraw_polar():
-        theta_o, curves = session.polar(state["theta_i"])
-        t = np.radians(theta_o)
-        for src, values in zip(polar_sources, curves):
-            r = np.log1p(np.maximum(values, 0.0)) if state["log"] else values
-            src.data = dict(x=r * np.sin(t), y=r * np.cos(t))
 
-    def redraw_albedo():
-        for src, (mean, err) in zip(albedo_sources,
-                                    session.albedo(ALBEDO_THETAS, ALBEDO_SAMPLES)):
-            src.data = dict(t=list(ALBEDO_THETAS), e=mean, lo=mean - 2 * err, hi=mean + 2 * err)
+def spheres(bsdfs, scene, light):
+    """The spheres of ``bsdfs`` under ``light`` (θ, φ), or with ``scene`` = (a scene file,
+    the id of its BSDF to replace) that scene's view under its own lights."""
+    from .sphere import Spheres
 
-    def redraw_xml():
-        xml.object = "\n\n".join(f"**{e.name}**\n```xml\n{e.xml()}\n```"
-                                 for e in session.entries)
+    if scene is None:
+        return Spheres(bsdfs, res=SPHERE_RES, theta=light[0], phi=light[1])
+    return Spheres.from_scene(scene[0], bsdfs, scene[1])
 
-    def on_change(entry, control, index, new):
+
+class Explorer:
+    """What one page shows and does: the session, the figures, the widgets and the
+    callbacks (``set_parameter``, ``set_switch``, ``set_view``, ``tick``, ``fit``) that the
+    browser's events call (and tests and the latency benchmark call directly)."""
+
+    def __init__(self, specs, theta_i: float = 30.0, scene=None):
+        import panel as pn
+
+        self.session = Session(specs)
+        self.view = {"theta_i": theta_i, "log": False, "cosine": True, "light": (45.0, 30.0)}
+        self.figures = Figures([e.name for e in self.session.entries])
+        self.spheres = spheres([e.bsdf for e in self.session.entries], scene,
+                               self.view["light"])
+        self.data = [dict() for _ in self.session.entries]
+        self.stale = {"verdicts": set(range(len(self.data))), "cost": True}
+        self.message = pn.pane.Alert("", alert_type="danger", visible=False,
+                                     css_classes=["mb-alert"])
+        self.lobe = pn.pane.Plotly(None, width=460, height=380, css_classes=["mb-lobe3d"])
+        self.verdicts = pn.pane.Markdown("", css_classes=["mb-verdicts"])
+        self.fit_result = pn.pane.Markdown("", css_classes=["mb-fit"])
+        self.code = {kind: pn.pane.Markdown("", css_classes=[f"mb-{kind}"])
+                     for kind in ("xml", "python")}
+        self.raw = {kind: pn.widgets.TextInput(value="", visible=False)
+                    for kind in ("xml", "python")}
+        self.columns = [pn.Column(css_classes=["mb-controls"]) for _ in self.session.entries]
+        for i in range(len(self.session.entries)):
+            self._controls(i)
+            self._compute(i)
+        self._draw()
+        self._draw_code()
+        self._sphere_pass()
+
+    # -- what a change does -------------------------------------------------------------
+    def set_parameter(self, i: int, key: str, value) -> bool:
+        """Set parameter ``key`` of BSDF ``i`` (through ``mi.traverse``) and redraw its views
+        and the first pass of the spheres; a refused value is shown, nothing changes."""
+        entry = self.session.entries[i]
         try:
-            entry.set(control.key, _value(control, index, new))
+            entry.set(key, value)
         except MiBrdfsError as e:
-            message.object, message.visible = str(e), True
-            return
-        message.visible = False
-        redraw_polar()
-        redraw_albedo()
-        redraw_xml()
+            return self._refuse(e)
+        self.message.visible = False
+        self._changed(i)
+        self._sync_widgets(i, key)
+        return True
 
+    def set_switch(self, i: int, name: str, value) -> bool:
+        """Set switch ``name`` of BSDF ``i``: the plugin is loaded anew (a switch selects
+        code), its controls are made anew, the spheres hold the new object."""
+        entry = self.session.entries[i]
+        try:
+            entry.switch(name, value)
+        except MiBrdfsError as e:
+            self._controls(i)  # the menu shows the value the BSDF keeps
+            return self._refuse(e)
+        self.message.visible = False
+        self.spheres.replace(i, entry.bsdf)
+        self.stale["cost"] = True
+        self._controls(i)
+        self._changed(i)
+        return True
+
+    def set_view(self, theta_i=None, log=None, cosine=None, light=None) -> None:
+        """Change what the views show (θi, log scale, f or f·cosθo, the light)."""
+        old = dict(self.view)
+        for key, value in (("theta_i", theta_i), ("log", log), ("cosine", cosine),
+                           ("light", light)):
+            if value is not None:
+                self.view[key] = value
+        if self.view["light"] != old["light"] and self.spheres.light is not None:
+            self.spheres.set_light(*self.view["light"])
+            self._sphere_pass()
+        if (self.view["theta_i"], self.view["cosine"]) != (old["theta_i"], old["cosine"]):
+            for i in range(len(self.data)):
+                self._compute(i, incident_only=True)
+            self.stale["verdicts"] = set(range(len(self.data)))
+        self._draw()
+
+    def _refuse(self, error: MiBrdfsError) -> bool:
+        self.message.object, self.message.visible = str(error), True
+        return False
+
+    def _changed(self, i: int) -> None:
+        """Redraw after a change of BSDF ``i``; :attr:`latency` says how long the 2-D plots
+        and the spheres' first pass took (seconds; ``make bench`` reports them)."""
+        clock = time.perf_counter()
+        self._compute(i)
+        self._draw()
+        self._draw_code()
+        plots = time.perf_counter()
+        self.stale["verdicts"].add(i)
+        self._sphere_pass()
+        self.latency = {"plots": plots - clock, "sphere": time.perf_counter() - plots}
+
+    # -- computing and drawing ----------------------------------------------------------
+    def _compute(self, i: int, incident_only: bool = False) -> None:
+        """The views of BSDF ``i`` (those that depend on θi only, with ``incident_only``)."""
+        bsdf, d, t = self.session.entries[i].bsdf, self.data[i], self.view["theta_i"]
+        from ..plots import lobe_values
+
+        d["polar"] = lobe_values(bsdf, t, 181, self.view["cosine"])
+        d["lobe"] = views.lobe3d(bsdf, t)
+        d["density"] = views.sampling_density(bsdf, t)
+        if not incident_only:
+            d["albedo"] = self.session.albedo_of(i, ALBEDO_THETAS, ALBEDO_SAMPLES)
+            d["slice"] = views.slice_image(bsdf)
+
+    def _draw(self) -> None:
+        f, names = self.figures, [e.name for e in self.session.entries]
+        f.draw_polar(self.view["theta_i"], self.data[0]["polar"][0],
+                     [d["polar"][1] for d in self.data], self.view["log"])
+        f.draw_albedo(ALBEDO_THETAS, [d["albedo"] for d in self.data])
+        f.draw_slices([d["slice"] for d in self.data])
+        f.draw_densities([d["density"] for d in self.data])
+        self.lobe.object = views.lobe3d_figure([d["lobe"] for d in self.data], names,
+                                               COLOURS)
+
+    def _draw_code(self) -> None:
+        entries = self.session.entries
+        for kind, fence in (("xml", "xml"), ("python", "python")):
+            texts = [e.xml() if kind == "xml" else e.python() for e in entries]
+            self.raw[kind].value = "\n\n".join(texts)
+            self.code[kind].object = "\n\n".join(
+                f"**{e.name}**\n```{fence}\n{text}\n```" for e, text in zip(entries, texts))
+
+    def _sphere_pass(self) -> None:
+        """Start the spheres anew and show their first pass."""
+        self.spheres.reset()
+        self.spheres.step()
+        self._draw_spheres()
+
+    def _draw_spheres(self) -> None:
+        n = len(self.session.entries)
+        self.figures.draw_spheres([self.spheres.image(i) for i in range(n)],
+                                  [self.spheres.difference(i) for i in range(1, n)],
+                                  [self.spheres.flip(i) for i in range(1, n)],
+                                  self.spheres.passes)
+
+    def tick(self) -> None:
+        """The timer's work, one piece at a time: a stale verdict, the cost per sample, else
+        one more pass of the spheres (up to :data:`SPHERE_PASSES`)."""
+        if self.stale["verdicts"]:
+            i = min(self.stale["verdicts"])
+            self.stale["verdicts"].discard(i)
+            self.data[i]["verdicts"] = views.verdicts(self.session.entries[i].bsdf,
+                                                      self.view["theta_i"])
+            self._draw_verdicts()
+        elif self.stale["cost"]:
+            self.stale["cost"] = False
+            self.cost = views.cost_per_sample([e.bsdf for e in self.session.entries])
+            self._draw_verdicts()
+        elif self.spheres.passes < SPHERE_PASSES:
+            self.spheres.step()
+            self._draw_spheres()
+
+    def _draw_verdicts(self) -> None:
+        rows = []
+        cost = getattr(self, "cost", None)
+        for i, (e, d) in enumerate(zip(self.session.entries, self.data)):
+            head = f"**{e.name}**"
+            if cost:
+                head += f" — cost per sample: {cost[i]:.0f} ns ({cost[i] / cost[0]:.2f}× the first)"
+            items = [f"- {'✔' if v.ok else '✘'} {v.name}: {v.text}"
+                     for v in d.get("verdicts", [])] or ["- (checking…)"]
+            rows.append("\n".join([head, *items]))
+        self.verdicts.object = "\n\n".join(rows)
+
+    # -- the fit button -----------------------------------------------------------------
+    def fit(self) -> bool:
+        """Fit the second BSDF's parameters to the first (``mi_brdfs.fit.fit``, a short run)
+        and put the fitted BSDF in its place; what the plugin or the fit refuses is shown."""
+        from ..fit import fit
+
+        if len(self.session.entries) < 2:
+            return self._refuse(MiBrdfsError("fit: give a second BSDF to fit to the first"))
+        target, model = self.session.entries[:2]
+        spec = model.as_dict()
+        if spec is None:
+            return self._refuse(MiBrdfsError(f"fit: {model.name} was given as XML; give it "
+                                             f"as 'type key=value' to fit it"))
+        try:
+            result = fit(target.bsdf, spec, pairs=FIT_PAIRS, steps=FIT_STEPS)
+            model.replace(result.spec)
+        except MiBrdfsError as e:
+            return self._refuse(e)
+        self.fit_result.object = f"**fit** (`mi_brdfs.fit.fit`, {FIT_STEPS} steps):\n\n" \
+                                 f"```\n{result.summary()}\n```"
+        self.spheres.replace(1, model.bsdf)
+        self.stale["cost"] = True
+        self._controls(1)
+        self._changed(1)
+        return True
+
+    # -- widgets ------------------------------------------------------------------------
+    def _controls(self, i: int) -> None:
+        """(Re)make the widgets of BSDF ``i``: its switches' menus, its sliders and fields."""
+        import panel as pn
+
+        entry = self.session.entries[i]
+        widgets = [pn.pane.Markdown(f"### <span style='color:{COLOURS[i]}'>■</span> "
+                                    f"{entry.name}")]
+        for name, (value, options) in entry.switches.items():
+            menu = pn.widgets.Select(label=name, options=[str(o).lower() if isinstance(o, bool)
+                                                         else o for o in options],
+                                     value=str(value).lower() if isinstance(value, bool)
+                                     else value, width=140)
+            menu.param.watch(lambda e, n=name, o=options: self.set_switch(
+                i, n, {str(v).lower(): v for v in o}[e.new]), "value")
+            widgets.append(menu)
+        self.sliders = getattr(self, "sliders", {})
+        for control in entry.controls.values():
+            widgets.append(self._control_row(pn, i, control))
+        self.columns[i].objects = widgets
+
+    def _control_row(self, pn, i: int, control):
+        """The sliders of one control and its field (a value typed in its own units)."""
+        sliders = []
+        channels = [None] if control.channels == 1 else [0, 1, 2]
+        for index in channels:
+            value = control.value if index is None else control.value[index]
+            lo, hi, v = control.lo, control.hi, value
+            if control.log:
+                lo, hi, v = math.log10(lo), math.log10(hi), math.log10(max(v, control.lo))
+            label = control.label + (" (log₁₀)" if control.log else "") + \
+                ("" if index is None else f" {'rgb'[index]}")
+            slider = pn.widgets.FloatSlider(label=label, start=lo, end=hi, step=(hi - lo) / 200,
+                                            value=min(max(v, lo), hi), format="0.000",
+                                            width=220)
+            slider.param.watch(lambda e, c=control, k=index: self.set_parameter(
+                i, c.key, _value(c, k, e.new)), "value_throttled")
+            sliders.append(slider)
+        field = pn.widgets.TextInput(label=control.label, value=_shown(control.value),
+                                     width=120, css_classes=["mb-field"])
+        field.param.watch(lambda e, c=control: self.set_parameter(i, c.key, _typed(e.new)),
+                          "value")
+        self.sliders[(i, control.key)] = (sliders, field)
+        return pn.Row(pn.Column(*sliders, margin=0), field)
+
+    def _sync_widgets(self, i: int, key: str) -> None:
+        """The field (and, for a typed value, the sliders) show the value now set."""
+        sliders, field = self.sliders[(i, key)]
+        control = self.session.entries[i].controls[key]
+        values = [control.value] if control.channels == 1 else list(control.value)
+        for slider, v in zip(sliders, values):
+            v = math.log10(max(v, control.lo)) if control.log else v
+            slider.value = min(max(v, slider.start), slider.end)
+        field.value = _shown(control.value)
+
+
+def build(specs, theta_i: float = 30.0, scene=None):
+    """The page for ``specs`` (1 to 4 BSDFs, any form), in the current (JIT) variant; its
+    :class:`Explorer` is ``page.explorer``; ``scene``: (a scene file, the id of the BSDF that
+    each BSDF replaces in it) rendered instead of the sphere."""
+    import panel as pn
+
+    x = Explorer(specs, theta_i, scene)
     theta = pn.widgets.FloatSlider(label="θi (degrees)", start=0.0, end=89.0, value=theta_i,
-                                   step=1.0)
-    log = pn.widgets.Checkbox(label="log scale (log(1 + f·cosθo))")
-
-    def on_view(event):
-        state["theta_i"], state["log"] = theta.value, log.value
-        redraw_polar()
-    theta.param.watch(on_view, "value_throttled")
-    log.param.watch(on_view, "value")
-
-    redraw_polar()
-    redraw_albedo()
-    redraw_xml()
-    columns = []
-    for entry in session.entries:
-        widgets = [w for c in entry.controls.values()
-                   for w in _slider(pn, entry, c, on_change)]
-        columns.append(pn.Column(pn.pane.Markdown(f"### {entry.name}"), *widgets))
+                                   step=1.0, width=220)
+    theta.param.watch(lambda e: x.set_view(theta_i=e.new), "value_throttled")
+    log = pn.widgets.Checkbox(label="log scale (log(1 + value))")
+    log.param.watch(lambda e: x.set_view(log=e.new), "value")
+    cosine = pn.widgets.Checkbox(label="times cosθo", value=True)
+    cosine.param.watch(lambda e: x.set_view(cosine=e.new), "value")
+    light = [pn.widgets.FloatSlider(label=f"light {n} (degrees)", start=lo, end=hi, value=v,
+                                    step=1.0, width=220)
+             for n, lo, hi, v in (("θ", 0.0, 180.0, x.view["light"][0]),
+                                  ("φ", -180.0, 180.0, x.view["light"][1]))]
+    for s in light:
+        s.param.watch(lambda e: x.set_view(light=tuple(w.value for w in light)),
+                      "value_throttled")
+    general = [theta, log, cosine, *(light if x.spheres.light is not None else [])]
+    if len(x.session.entries) > 1:
+        button = pn.widgets.Button(label="fit the second BSDF to the first", color="primary")
+        button.on_click(lambda e: x.fit())
+        general.append(button)
+    copies = []
+    for kind in ("xml", "python"):
+        copy = pn.widgets.Button(label=f"copy {kind.upper() if kind == 'xml' else 'Python'}")
+        copy.js_on_click(args={"source": x.raw[kind]},
+                         code="navigator.clipboard.writeText(source.value)")
+        copies.append(pn.Column(copy, x.raw[kind], x.code[kind]))
+    f = x.figures
     page = pn.Column(
-        pn.pane.Markdown("# mi-brdfs explore"), message,
-        pn.Row(*columns, pn.Column(theta, log)),
-        pn.Row(pn.pane.Bokeh(polar), pn.pane.Bokeh(albedo)), xml)
-    page.session = session  # what the page shows, for tests and notebooks
+        pn.pane.Markdown("# mi-brdfs explore"), x.message,
+        pn.Row(*x.columns, pn.Column(pn.pane.Markdown("### views"), *general)),
+        pn.Row(pn.pane.Bokeh(f.polar, css_classes=["mb-polar"]),
+               pn.pane.Bokeh(f.albedo, css_classes=["mb-albedo"]), x.lobe),
+        pn.Row(pn.Column(pn.pane.Markdown("**(θh, θd) slice, φd = 90°**"),
+                         pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.slices]),
+                         css_classes=["mb-slice"]),
+               pn.Column(pn.pane.Markdown("**sampled density / (f·cosθo / E)**, log₂ "
+                                          "(blue: oversampled, red: missed)"),
+                         pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.densities]),
+                         css_classes=["mb-density"])),
+        pn.Column(pn.pane.Markdown("**spheres** (Mitsuba's path tracer, progressive)"),
+                  pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.spheres]),
+                  pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.differences]),
+                  css_classes=["mb-sphere"]),
+        pn.Row(x.verdicts, x.fit_result),
+        pn.Row(*copies))
+    page.explorer = x
+    page.session = x.session
+    pn.state.onload(lambda: pn.state.add_periodic_callback(x.tick, period=TICK_MS))
     return page

@@ -28,17 +28,18 @@ def free_port(host: str, port: int | None) -> int:
         return s.getsockname()[1]
 
 
-def serve(specs, port: int, host: str = LOCALHOST, browser: bool = True,
+def serve(specs, port: int, host: str = LOCALHOST, browser: bool = True, scene=None,
           out=sys.stdout) -> int:
-    """Serve the explorer of ``specs`` (checked already) on ``port`` (:func:`free_port`)
-    until Ctrl-C or SIGTERM; 0."""
+    """Serve the explorer of ``specs`` (checked already; ``scene``: see
+    :func:`~mi_brdfs.explorer.app.build`) on ``port`` (:func:`free_port`) until Ctrl-C or
+    SIGTERM; 0."""
     import panel as pn
 
     from .app import build
 
     url = f"http://{'localhost' if host == LOCALHOST else host}:{port}/"
     origins = [f"{h}:{port}" for h in ("localhost", LOCALHOST, host)]
-    server = pn.serve({"/": lambda: build(specs)}, port=port, address=host,
+    server = pn.serve({"/": lambda: build(specs, scene=scene)}, port=port, address=host,
                       websocket_origin=origins, show=False, start=False, verbose=False,
                       title="mi-brdfs explore")
     loop = server.io_loop

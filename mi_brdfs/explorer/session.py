@@ -91,15 +91,48 @@ class Entry:
     parameters and controls."""
 
     def __init__(self, spec):
+        spec = parse(spec)
+        self.name = describe(spec)
+        self._load(_expanded(spec))
+
+    def _load(self, spec) -> None:
         import mitsuba as mi
 
-        self.spec = parse(spec)
-        self.bsdf = load_bsdf(self.spec)
-        self.params = mi.traverse(self.bsdf)
+        bsdf = load_bsdf(spec)
+        self.spec, self.bsdf, self.params = spec, bsdf, mi.traverse(bsdf)
         self.controls = {c.key: c for c in controls(self.params)}
-        self.name = describe(self.spec)
         #: the labels of the parameters set since loading (the dict and XML write those)
         self.changed = set()
+
+    @property
+    def switches(self) -> dict:
+        """name → (value now, the values allowed) of the configuration switches of the BSDF's
+        plugin: ours as the plugin itself read them (``properties.SWITCHES``), Mitsuba's
+        built-ins' as the audit's table lists them; none where the BSDF was given as XML."""
+        from ..audit.switches import SWITCHES as BUILTIN
+        from ..plugins.properties import SWITCHES as OURS
+
+        if not isinstance(self.spec, dict):
+            return {}
+        kind = self.spec.get("type")
+        table = dict(OURS.get(kind, {}))
+        table.update({s.name: (s.menu[0], s.menu) for s in BUILTIN.get(kind, ()) if s.menu})
+        return {name: (self.spec.get(name, default), options)
+                for name, (default, options) in table.items()}
+
+    def replace(self, spec) -> None:
+        """Load the BSDF anew from ``spec`` (a dict: the fit button's result), its name kept."""
+        self._load(_expanded(parse(spec)))
+
+    def switch(self, name: str, value) -> None:
+        """Set a configuration switch: it selects the plugin's code, so the BSDF is loaded
+        anew (a new plugin object, its kernels traced anew) with the parameters as they are;
+        a value the plugin refuses raises MiBrdfsError in its words and changes nothing."""
+        switches = self.switches
+        if name not in switches:
+            raise MiBrdfsError(f"{self.name}: no switch {name!r} (it has: "
+                               f"{', '.join(switches) or 'none'})")
+        self._load(self.as_dict({name: value}))
 
     def set(self, key: str, value) -> None:
         """Set a parameter through ``mi.traverse`` (no new plugin object, no re-trace); a value
@@ -114,7 +147,9 @@ class Entry:
         numbers = _numbers(self.name, control, value)
         self._validate(control, numbers)
         old = self.params[key]
-        self.params[key] = type(old)(*numbers) if control.channels == 3 else type(old)(numbers[0])
+        new = type(old)(*numbers) if control.channels == 3 else type(old)(numbers[0])
+        dr.make_opaque(new)  # an input of the kernels, not a literal traced into their code
+        self.params[key] = new
         try:
             self.params.update()
         except RuntimeError as e:
@@ -158,10 +193,31 @@ class Entry:
                 if isinstance(value, tuple) else value
         return out
 
+    def python(self) -> str:
+        """The Python that loads the BSDF with the current values (``mi.load_dict`` of
+        :meth:`as_dict`, or ``mi.load_string`` of the XML fragment it was given as)."""
+        import pprint
+
+        spec = self.as_dict()
+        if spec is None:
+            return f"mi.load_string({self.xml()!r})"
+        return f"mi.load_dict({pprint.pformat(spec, sort_dicts=False)})"
+
     def xml(self) -> str:
         """The XML fragment that reproduces the BSDF with the current values."""
         spec = self.as_dict()
         return to_xml(spec if spec is not None else self.spec)
+
+
+def _expanded(spec):
+    """A dict with a ``preset`` as the preset's parameters (those given winning, as in a
+    scene), so that the switches, the dict and the XML show what the plugin uses."""
+    from ..presets import spec as preset_spec
+
+    if not isinstance(spec, dict) or not isinstance(spec.get("preset"), str):
+        return spec
+    given = {k: v for k, v in spec.items() if k not in ("type", "preset")}
+    return preset_spec(spec["type"], spec["preset"], **given)
 
 
 def _numbers(name: str, control: Control, value) -> list[float]:
@@ -199,11 +255,17 @@ class Session:
     def albedo(self, thetas_deg, n: int = 20_000):
         """E(θi) of each BSDF from its ``sample()`` weights, with the standard errors:
         [(means, errors)] over ``thetas_deg`` (the channels' mean)."""
-        from ..checks.albedo import albedo_sampled
+        return [self.albedo_of(i, thetas_deg, n) for i in range(len(self.entries))]
 
-        out = []
-        for entry in self.entries:
-            rows = [albedo_sampled(entry.bsdf, math.radians(t), n=n) for t in thetas_deg]
-            out.append((np.array([m.mean() for m, _ in rows]),
-                        np.array([e.mean() for _, e in rows])))
-        return out
+    def albedo_of(self, i: int, thetas_deg, n: int = 20_000, seed: int = 0):
+        """E(θi) of BSDF ``i`` and its standard errors (:meth:`albedo`): the mean ``sample()``
+        weight of ``n`` samples per angle, all angles in one launch (one kernel, not one per
+        angle)."""
+        from ..checks import batch
+
+        t = np.repeat(np.radians(np.asarray(thetas_deg, np.float64)), n)
+        wi = np.stack([np.sin(t), 0.0 * t, np.cos(t)], axis=1)
+        rng = np.random.default_rng(seed)
+        s = batch.sample(self.entries[i].bsdf, wi, rng.random(t.size), rng.random((t.size, 2)))
+        w = np.where(np.isfinite(s.weight), s.weight, np.nan).mean(axis=1).reshape(-1, n)
+        return w.mean(axis=1), w.std(axis=1, ddof=1) / math.sqrt(n)

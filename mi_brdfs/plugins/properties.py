@@ -289,8 +289,15 @@ def number(props, plugin: str, name: str, default: float, lo: float = -math.inf,
     return value
 
 
+#: plugin → {switch: (its default, its choices)}: every :func:`choice` and :func:`boolean` a
+#: plugin has read, so that a tool offers a plugin's switches (``mi-brdfs explore``'s menus)
+#: from the plugin's own reading of them, not from a second list.
+SWITCHES: dict[str, dict[str, tuple]] = {}
+
+
 def choice(props, plugin: str, name: str, default: str, choices) -> str:
     """A string among ``choices`` (case-sensitive, as Mitsuba's own options)."""
+    SWITCHES.setdefault(plugin, {})[name] = (default, tuple(choices))
     if name not in props:
         return default
     value = props[name]
@@ -314,6 +321,7 @@ def filename(props, plugin: str, name: str = "filename", suffix: str = "") -> st
 
 
 def boolean(props, plugin: str, name: str, default: bool) -> bool:
+    SWITCHES.setdefault(plugin, {})[name] = (default, (False, True))
     if name not in props:
         return default
     value = props[name]

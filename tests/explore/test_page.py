@@ -1,8 +1,8 @@
 """
 The page of ``mi-brdfs explore`` (mi_brdfs.explorer.app), driven from Python as the browser
-drives it (a slider's throttled value): the polar view and the XML follow a slider, a value the
-plugin refuses shows its message on the page and changes nothing, two pages (two browser
-sessions) keep their own state, and the server (``mi-brdfs explore``) answers on 127.0.0.1,
+drives it (a slider's throttled value, a typed field, a menu, the fit button): every view of
+the BSDF changed follows, and only its; a value the plugin refuses shows its message on the
+page and changes nothing; two pages (two browser sessions) keep their own state; the server (``mi-brdfs explore``) answers on 127.0.0.1,
 refuses a port in use and an unknown BSDF in one line before it starts, and stops on SIGTERM.
 """
 
@@ -24,61 +24,116 @@ def pn():
     return pytest.importorskip("panel")
 
 GOLD = "cooktorrance alpha=0.3 material=Au"
+TWIN = "roughconductor alpha=0.3 material=Au"
 
 
-def _parts(page):
-    import panel as pn
-
-    """(the sliders by name, the polar plot's first data source, the XML pane, the message)."""
-    sliders = {w.label: w for column in page[2] for w in getattr(column, "objects", [])
-               if isinstance(w, pn.widgets.FloatSlider)}
-    polar = page[3][0].object.renderers[0].data_source
-    return sliders, polar, page[4], page[1]
-
-
-def _move(slider, value):
+def _move(widget, value):
     """What the browser does when a slider is released."""
     import param
 
-    with param.edit_constant(slider):
-        slider.value_throttled = value
+    with param.edit_constant(widget):
+        widget.value_throttled = value
 
 
-def test01_a_slider_moves_the_views_and_the_xml(variant_llvm_ad_rgb, pn):
+def _views(x) -> dict:
+    """What each view of BSDF 0 and 1 shows now, as arrays (copies)."""
+    f = x.figures
+    out = {}
+    for i in range(len(x.session.entries)):
+        out[("polar", i)] = np.array(f.polar_src[i].data["y"])
+        out[("albedo", i)] = np.array(f.albedo_src[i].data["e"])
+        out[("slice", i)] = np.array(f.slices[i][1].data["image"][0])
+        out[("density", i)] = np.array(f.densities[i][1].data["image"][0])
+        out[("lobe", i)] = np.array(x.lobe.object["data"][i]["z"], np.float64)
+        out[("sphere", i)] = np.array(f.spheres[i][1].data["image"][0])
+    return out
+
+
+def _same(a, b) -> bool:
+    return a.shape == b.shape and bool(np.all((a == b) | (np.isnan(a) & np.isnan(b))))
+
+
+def test01_a_slider_moves_every_view_of_its_bsdf(variant_llvm_ad_rgb, pn):
+    """α of the first BSDF moved on its slider: its polar curve, albedo, 3-D lobe, slice,
+    sampling density and sphere change, the second BSDF's views do not; the field, the XML and
+    the Python follow; the timer then computes the verdicts, the cost per sample and further
+    passes of the spheres."""
     from mi_brdfs.explorer.app import build
 
-    page = build([GOLD])
-    sliders, polar, xml, message = _parts(page)
-    before = np.array(polar.data["y"])
-    _move(sliders["alpha (log₁₀)"], -1.0)
-    after = np.array(polar.data["y"])
-    assert after.max() > 2 * before.max()  # a narrower lobe, a taller peak
-    assert '<float name="alpha" value="0.1"/>' in xml.object
-    assert not message.visible
+    page = build([GOLD, TWIN])
+    x = page.explorer
+    before = _views(x)
+    (slider,), field = x.sliders[(0, "alpha.value")]
+    _move(slider, -1.0)
+    after = _views(x)
+    for (view, i), old in before.items():
+        assert _same(old, after[(view, i)]) == (i == 1), (view, i)
+    assert after[("polar", 0)].max() > 2 * before[("polar", 0)].max()  # narrower, taller
+    assert field.value == "0.1" and not x.message.visible
+    assert '<float name="alpha" value="0.1"/>' in x.code["xml"].object
+    assert "'alpha': 0.1" in x.raw["python"].value
+    for _ in range(3):  # verdicts of each BSDF, then the cost per sample
+        x.tick()
+    assert x.verdicts.object.count("✔") == 8 and "cost per sample" in x.verdicts.object
+    passes = x.spheres.passes
+    x.tick()
+    assert x.spheres.passes == passes + 1
 
 
 def test02_a_refused_value_is_shown_on_the_page(variant_llvm_ad_rgb, pn):
-    """η's red channel moved to 0 is refused by cooktorrance (η must be > 0): its message on
-    the page, the views and the XML as they were."""
+    """Text typed into α's field, and α = −1, are refused on the page in one line (the
+    second in cooktorrance's own words); the views and the XML stay as they were."""
     from mi_brdfs.explorer.app import build
 
-    page = build(["cooktorrance alpha=0.3 eta=1.5 k=0"])
-    sliders, polar, xml, message = _parts(page)
-    before, text = np.array(polar.data["y"]), xml.object
-    eta = sliders["eta"]
-    _move(eta, eta.start - 1.0)
-    assert message.visible and "cooktorrance" in message.object
-    np.testing.assert_array_equal(polar.data["y"], before)
-    assert xml.object == text
+    x = build([GOLD]).explorer
+    before, text = _views(x), x.code["xml"].object
+    field = x.sliders[(0, "alpha.value")][1]
+    for typed, words in (("rough", "expected a number"),
+                         ("-1", 'cooktorrance: parameter "alpha" = -1')):
+        field.value = typed
+        assert x.message.visible and words in x.message.object
+        assert len(x.message.object.splitlines()) == 1
+    assert all(_same(v, _views(x)[k]) for k, v in before.items())
+    assert x.code["xml"].object == text
+    field.value = "0.2"
+    assert not x.message.visible and 'value="0.2"' in x.code["xml"].object
 
 
-def test03_two_pages_keep_their_own_state(variant_llvm_ad_rgb, pn):
+def test03_a_switch_menu_reloads_the_plugin(variant_llvm_ad_rgb, pn):
+    """The distribution menu set to GGX: a new plugin object in the session and in its
+    sphere, the views redrawn (GGX's longer tail), the XML naming it."""
     from mi_brdfs.explorer.app import build
 
-    a, b = build([GOLD]), build([GOLD])
-    _move(_parts(a)[0]["alpha (log₁₀)"], -1.0)
-    assert 'value="0.1"' in _parts(a)[2].object and 'value="0.1"' not in _parts(b)[2].object
+    x = build([GOLD]).explorer
+    menu = next(w for w in x.columns[0].objects if getattr(w, "label", "") == "distribution")
+    old, before = x.session.entries[0].bsdf, _views(x)
+    menu.value = "ggx"
+    entry = x.session.entries[0]
+    assert entry.bsdf is not old and x.spheres.bsdfs[0] is entry.bsdf
+    assert not _same(before[("polar", 0)], _views(x)[("polar", 0)])
+    assert '<string name="distribution" value="ggx"/>' in x.code["xml"].object
+
+
+def test04_two_pages_keep_their_own_state(variant_llvm_ad_rgb, pn):
+    from mi_brdfs.explorer.app import build
+
+    a, b = build([GOLD]).explorer, build([GOLD]).explorer
+    _move(a.sliders[(0, "alpha.value")][0][0], -1.0)
+    assert 'value="0.1"' in a.code["xml"].object and 'value="0.1"' not in b.code["xml"].object
     assert a.session.entries[0].bsdf is not b.session.entries[0].bsdf
+
+
+def test07_the_fit_button_fits_the_second_bsdf(variant_llvm_ad_rgb, pn):
+    """Fit: the second BSDF (Mitsuba's roughconductor, α = 0.6) fitted to the first (our
+    cooktorrance, α = 0.2, the same GGX and gold) comes out at α = 0.2, and is shown."""
+    from mi_brdfs.explorer.app import build
+
+    x = build(["cooktorrance alpha=0.2 material=Au distribution=ggx shadowing=smith",
+               "roughconductor alpha=0.6 material=Au distribution=ggx"]).explorer
+    assert x.fit()
+    model = x.session.entries[1]
+    assert float(model.params["alpha.value"][0]) == pytest.approx(0.2, rel=0.05)
+    assert x.spheres.bsdfs[1] is model.bsdf and "fit" in x.fit_result.object
 
 
 def _free_port() -> int:
@@ -93,7 +148,7 @@ def _explore(*args):
                             env=dict(os.environ, MI_BRDFS_NO_PROGRESS="1"))
 
 
-def test04_the_server_serves_and_stops_on_sigterm(variant_llvm_ad_rgb, pn):
+def test05_the_server_serves_and_stops_on_sigterm(variant_llvm_ad_rgb, pn):
     """The page answers 200 on 127.0.0.1 at the port printed; SIGTERM stops the server within
     5 s with exit status 0."""
     port = _free_port()
@@ -109,7 +164,7 @@ def test04_the_server_serves_and_stops_on_sigterm(variant_llvm_ad_rgb, pn):
         proc.kill()
 
 
-def test05_bad_input_ends_in_one_line_before_any_server(variant_llvm_ad_rgb, pn, capsys):
+def test06_bad_input_ends_in_one_line_before_any_server(variant_llvm_ad_rgb, pn, capsys):
     """A port in use, an unknown plugin, five BSDFs, a scalar variant: one line each on
     stderr, exit status 2, nothing on stdout (no server started)."""
     from mi_brdfs.cli import main

@@ -96,3 +96,31 @@ def test04_dict_and_xml_reproduce_the_bsdf_now(variant_llvm_ad_rgb):
         got = batch.evaluate(load_bsdf(other), wi, wo).value
         np.testing.assert_allclose(got, want, rtol=1e-5)
     assert '<float name="alpha" value="0.12"/>' in entry.xml()
+
+
+def test05_switches_are_menus_that_reload_the_plugin(variant_llvm_ad_rgb):
+    """cooktorrance's switches as it reads them (distribution, fresnel, multiscatter, ...),
+    a built-in's from the audit's table, a preset's as its parameters; a switch set loads the
+    plugin anew with the parameters as they were (eval equals the dict's with both), the
+    Python shown loads the same BSDF, and a value the plugin refuses changes nothing."""
+    session = Session([GOLD, "roughplastic alpha=0.2", "ward preset=ngan:gold-metallic-paint"])
+    gold, plastic, ward = session.entries
+    assert gold.switches["distribution"] == ("beckmann", ("beckmann", "ggx"))
+    assert gold.switches["multiscatter"] == (False, (False, True))
+    assert plastic.switches["nonlinear"] == (False, (False, True))
+    assert ward.switches["form"][0] == "original"  # the preset's, not the plugin's default
+    gold.set("alpha.value", 0.15)
+    old = gold.bsdf
+    gold.switch("distribution", "ggx")
+    assert gold.bsdf is not old and gold.switches["distribution"][0] == "ggx"
+    wi = batch.direction(math.radians(-30.0))
+    wo = np.array([[0.2, 0.1, 0.97], [0.5, 0.0, 0.86]])
+    wo /= np.linalg.norm(wo, axis=1, keepdims=True)
+    want = batch.evaluate(load_bsdf(dict(GOLD, alpha=0.15, distribution="ggx")), wi, wo).value
+    np.testing.assert_allclose(batch.evaluate(gold.bsdf, wi, wo).value, want, rtol=1e-5)
+    assert gold.python().startswith("mi.load_dict(")
+    shown = eval(gold.python()[len("mi.load_dict("):-1])  # the dict the page shows
+    np.testing.assert_allclose(batch.evaluate(load_bsdf(shown), wi, wo).value, want, rtol=1e-5)
+    with pytest.raises(MiBrdfsError, match='"distribution" = "foo"'):
+        gold.switch("distribution", "foo")
+    assert gold.switches["distribution"][0] == "ggx"

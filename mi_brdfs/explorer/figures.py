@@ -1,0 +1,139 @@
+"""
+The explorer's plots as Bokeh figures with their data sources (:class:`Figures`): made once
+per page, then only their sources' data change (Bokeh sends the new columns; nothing is laid
+out again). What they show is computed elsewhere, by the BSDFs themselves
+(:mod:`~mi_brdfs.explorer.session`, :mod:`~mi_brdfs.explorer.views`,
+:mod:`~mi_brdfs.explorer.sphere`); here it is only drawn: curves overlaid one colour per BSDF,
+images (the (θh, θd) slice, the sampling density, the spheres) side by side.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: One colour per BSDF, in the order given (Bokeh's Category10).
+COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728")
+
+#: Pixels of each small image on the page.
+TILE = 150
+
+#: The sampling-density view's colour range: log₂ of density / (f·cosθo / E).
+RATIO_RANGE = 3.0
+
+
+def rgba(image: np.ndarray) -> np.ndarray:
+    """An 8-bit (h, w, 3 or 4) image as Bokeh's ``image_rgba`` takes it: one uint32 per pixel,
+    its rows from the bottom."""
+    h, w = image.shape[:2]
+    out = np.full((h, w, 4), 255, np.uint8)
+    out[..., :image.shape[2]] = image[..., :4]
+    return out[::-1].copy().view(np.uint32).reshape(h, w)
+
+
+def _tile(title: str, width: int = TILE, height: int = TILE, x=(0, 1), y=(0, 1)):
+    from bokeh.plotting import figure
+
+    f = figure(title=title, width=width, height=height + 30, x_range=x, y_range=y,
+               tools="", toolbar_location=None, min_border=2)
+    f.axis.visible = False
+    f.grid.visible = False
+    f.title.text_font_size = "9pt"
+    return f
+
+
+class Figures:
+    """The Bokeh figures of a page for ``names`` (the BSDFs' names)."""
+
+    def __init__(self, names: list[str]):
+        from bokeh.models import ColumnDataSource, LinearColorMapper
+        from bokeh.plotting import figure
+
+        n = len(names)
+        self.names = names
+        self.polar = figure(title="f·cosθo in the plane of incidence", width=460, height=320,
+                            match_aspect=True)
+        self.albedo = figure(title="albedo E(θi) from sample() (± 2 standard errors)",
+                             width=460, height=320, x_axis_label="θi (degrees)",
+                             y_axis_label="E", y_range=(0.0, 1.1))
+        self.polar_src = [ColumnDataSource(dict(x=[], y=[])) for _ in range(n)]
+        self.albedo_src = [ColumnDataSource(dict(t=[], e=[], lo=[], hi=[])) for _ in range(n)]
+        for name, src, asrc, colour in zip(names, self.polar_src, self.albedo_src, COLOURS):
+            self.polar.line("x", "y", source=src, color=colour, legend_label=name,
+                            line_width=2)
+            self.albedo.line("t", "e", source=asrc, color=colour, legend_label=name,
+                             line_width=2)
+            self.albedo.varea("t", "lo", "hi", source=asrc, color=colour, alpha=0.2)
+        self.incident = ColumnDataSource(dict(x=[], y=[]))
+        self.polar.line("x", "y", source=self.incident, color="grey", line_dash="dashed")
+        for f in (self.polar, self.albedo):
+            f.legend.label_text_font_size = "8pt"
+            f.legend.background_fill_alpha = 0.6
+        self.slice_map = LinearColorMapper(palette="Viridis256", low=0.0, high=1.0)
+        self.density_map = LinearColorMapper(palette="RdBu11", low=-RATIO_RANGE,
+                                             high=RATIO_RANGE, nan_color="white")
+        self.slices = [self._image(f"{name}: log(1 + f) over (θh, θd)", self.slice_map)
+                       for name in names]
+        self.densities = [self._image(f"{name}", self.density_map) for name in names]
+        self.spheres = [self._rgba(name) for name in names]
+        self.differences = [self._rgba(f"|{name} − first|") for name in names[1:]]
+
+    def _image(self, title, mapper):
+        from bokeh.models import ColumnDataSource
+
+        f = _tile(title)
+        src = ColumnDataSource(dict(image=[np.zeros((2, 2))]))
+        f.image("image", source=src, x=0, y=0, dw=1, dh=1, color_mapper=mapper)
+        return f, src
+
+    def _rgba(self, title):
+        from bokeh.models import ColumnDataSource
+
+        f = _tile(title)
+        src = ColumnDataSource(dict(image=[np.zeros((2, 2), np.uint32)]))
+        f.image_rgba("image", source=src, x=0, y=0, dw=1, dh=1)
+        return f, src
+
+    def draw_polar(self, theta_i_deg: float, theta_o_deg, curves, log: bool) -> None:
+        """Each BSDF's curve in polar form (radius: the value, or log(1 + value)), and the
+        incident direction dashed."""
+        t = np.radians(theta_o_deg)
+        top = 0.0
+        for src, values in zip(self.polar_src, curves):
+            r = np.log1p(np.maximum(values, 0.0)) if log else np.asarray(values)
+            src.data = dict(x=r * np.sin(t), y=r * np.cos(t))
+            top = max(top, float(np.nanmax(r, initial=0.0)))
+        ti = np.radians(theta_i_deg)
+        self.incident.data = dict(x=[0.0, -top * np.sin(ti)], y=[0.0, top * np.cos(ti)])
+
+    def draw_albedo(self, thetas_deg, rows) -> None:
+        """E(θi) of each BSDF with a band of ± 2 standard errors."""
+        for src, (mean, err) in zip(self.albedo_src, rows):
+            src.data = dict(t=list(thetas_deg), e=mean, lo=mean - 2 * err, hi=mean + 2 * err)
+
+    def draw_slices(self, images) -> None:
+        """The (θh, θd) images (rows θd, columns θh), as log(1 + f) on one colour scale."""
+        logs = [np.log1p(np.maximum(np.nan_to_num(i, nan=0.0), 0.0)) for i in images]
+        self.slice_map.high = max(max(float(v.max()) for v in logs), 1e-6)
+        for (_, src), image in zip(self.slices, logs):
+            src.data = dict(image=[image])
+
+    def draw_densities(self, densities) -> None:
+        """log₂ of the sampled density over f·cosθo/E per BSDF; its title gives the share of
+        f·cosθo that importance sampling misses."""
+        for (f, src), name, d in zip(self.densities, self.names, densities):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                ratio = np.log2(d.histogram / d.target)
+            ratio[~np.isfinite(ratio) | (d.target <= 0)] = np.nan
+            src.data = dict(image=[np.clip(ratio, -RATIO_RANGE, RATIO_RANGE)])
+            f.title.text = f"{name}: missed {100 * d.missed:.1f} %"
+
+    def draw_spheres(self, images, differences, flips, passes: int) -> None:
+        """The spheres (8-bit sRGB) with their passes, and each one's difference from the
+        first with its mean FLIP."""
+        for (f, src), name, image in zip(self.spheres, self.names, images):
+            src.data = dict(image=[rgba(image)])
+            f.title.text = f"{name} ({passes} passes)"
+        for (f, src), name, image, value in zip(self.differences, self.names[1:], differences,
+                                                flips):
+            src.data = dict(image=[rgba(image)])
+            f.title.text = f"|{name} − first|: FLIP {value:.3f}"
