@@ -48,9 +48,9 @@ from .registry import _install as _install  # noqa: E402
 _install()
 
 
-def explore(*bsdfs, variant=None):
+def explore(*bsdfs, variant=None, scene=None, scene_bsdf=None):
     """The interactive explorer of 1 to 4 BSDFs as a Panel layout, for Jupyter notebooks
     (:func:`mi_brdfs.explorer.explore`; needs ``pip install 'mi-brdfs[explore]'``)."""
     from .explorer import explore as _explore
 
-    return _explore(*bsdfs, variant=variant)
+    return _explore(*bsdfs, variant=variant, scene=scene, scene_bsdf=scene_bsdf)

@@ -138,7 +138,10 @@ class OrenNayar(mi.BSDF):
         self.m_components, self.m_flags = lobes.components(self.lobes.lobes)
 
     def parameters_changed(self, keys=()):
-        """The lobe, from the parameters as they are now."""
+        """The lobe, from the parameters as they are now (a number σ opaque: a new value
+        updates the kernels' inputs, not their code)."""
+        if not self._textured_sigma:
+            dr.make_opaque(self.m_sigma)
         self.lobes = lobes.Mixture([RoughDiffuse(self.m_reflectance, self.m_sigma, self.m_form)])
 
     # one lobe: ωo from the cosine-weighted hemisphere, pdf cosθo/π

@@ -123,6 +123,23 @@ def test04_two_pages_keep_their_own_state(variant_llvm_ad_rgb, pn):
     assert a.session.entries[0].bsdf is not b.session.entries[0].bsdf
 
 
+def test08_the_notebook_entry_gives_the_same_page(variant_llvm_ad_rgb, pn):
+    """``mi_brdfs.explore`` (a notebook's entry) returns the page as a Panel layout for the
+    BSDFs given, a bundled scene in place of the sphere included; a scene without the id of
+    its BSDF, or a scalar variant, is refused in one line."""
+    import mi_brdfs
+    from mi_brdfs.errors import MiBrdfsError
+
+    page = mi_brdfs.explore(GOLD, scene="material", scene_bsdf="material")
+    assert isinstance(page, pn.layout.Column) and page.explorer.spheres.light is None
+    assert page.session.entries[0].name == "cooktorrance(alpha=0.3, material=Au)"
+    assert page.explorer.figures.spheres[0][1].data["image"][0].shape[0] > 2  # a first pass
+    with pytest.raises(MiBrdfsError, match="needs the id of the BSDF"):
+        mi_brdfs.explore(GOLD, scene="material")
+    with pytest.raises(MiBrdfsError, match="needs a JIT variant"):
+        mi_brdfs.explore(GOLD, variant="scalar_rgb")
+
+
 def test07_the_fit_button_fits_the_second_bsdf(variant_llvm_ad_rgb, pn):
     """Fit: the second BSDF (Mitsuba's roughconductor, α = 0.6) fitted to the first (our
     cooktorrance, α = 0.2, the same GGX and gold) comes out at α = 0.2, and is shown."""
