@@ -63,6 +63,23 @@ def _typed(text: str):
     return numbers[0] if len(numbers) == 1 else tuple(numbers)
 
 
+def _angles(text: str) -> tuple:
+    """Up to :data:`~mi_brdfs.explorer.figures.MORE_THETAS` incident angles in [0°, 90°)
+    from a comma-separated text (empty: none); MiBrdfsError with one line otherwise."""
+    from .figures import MORE_THETAS
+
+    parts = [p.strip() for p in str(text).split(",") if p.strip()]
+    try:
+        angles = tuple(float(p) for p in parts)
+    except ValueError:
+        angles = None
+    if angles is None or len(angles) > MORE_THETAS or \
+            not all(0.0 <= a < 90.0 for a in angles):
+        raise MiBrdfsError(f"explore: other θi = {text!r}: expected up to {MORE_THETAS} "
+                           f"angles in degrees in [0, 90), comma-separated")
+    return angles
+
+
 def _shown(value) -> str:
     if isinstance(value, tuple):
         return ", ".join(f"{v:.4g}" for v in value)
@@ -88,7 +105,8 @@ class Explorer:
         import panel as pn
 
         self.session = Session(specs)
-        self.view = {"theta_i": theta_i, "log": False, "cosine": True, "light": (45.0, 30.0)}
+        self.view = {"theta_i": theta_i, "log": False, "cosine": True, "light": (45.0, 30.0),
+                     "more": ()}
         self.figures = Figures([e.name for e in self.session.entries])
         self.spheres = spheres([e.bsdf for e in self.session.entries], scene,
                                self.view["light"])
@@ -141,21 +159,31 @@ class Explorer:
         self._changed(i)
         return True
 
-    def set_view(self, theta_i=None, log=None, cosine=None, light=None) -> None:
-        """Change what the views show (θi, log scale, f or f·cosθo, the light)."""
+    def set_view(self, theta_i=None, log=None, cosine=None, light=None, more=None) -> bool:
+        """Change what the views show (θi, log scale, f or f·cosθo, the light, the polar
+        plot's other incident angles: a text of up to three angles in degrees, which is
+        refused on the page where it is none)."""
         old = dict(self.view)
+        if more is not None:
+            try:
+                more = _angles(more)
+            except MiBrdfsError as e:
+                return self._refuse(e)
+            self.message.visible = False
         for key, value in (("theta_i", theta_i), ("log", log), ("cosine", cosine),
-                           ("light", light)):
+                           ("light", light), ("more", more)):
             if value is not None:
                 self.view[key] = value
         if self.view["light"] != old["light"] and self.spheres.light is not None:
             self.spheres.set_light(*self.view["light"])
             self._sphere_pass()
-        if (self.view["theta_i"], self.view["cosine"]) != (old["theta_i"], old["cosine"]):
+        key = ("theta_i", "cosine", "more")
+        if [self.view[k] for k in key] != [old[k] for k in key]:
             for i in range(len(self.data)):
                 self._compute(i, incident_only=True)
             self.stale["verdicts"] = set(range(len(self.data)))
         self._draw()
+        return True
 
     def _refuse(self, error: MiBrdfsError) -> bool:
         self.message.object, self.message.visible = str(error), True
@@ -180,6 +208,8 @@ class Explorer:
         from ..plots import lobe_values
 
         d["polar"] = lobe_values(bsdf, t, 181, self.view["cosine"])
+        d["polar_more"] = [lobe_values(bsdf, u, 181, self.view["cosine"])[1]
+                           for u in self.view["more"]]
         d["lobe"] = views.lobe3d(bsdf, t)
         d["density"] = views.sampling_density(bsdf, t)
         if not incident_only:
@@ -189,7 +219,8 @@ class Explorer:
     def _draw(self) -> None:
         f, names = self.figures, [e.name for e in self.session.entries]
         f.draw_polar(self.view["theta_i"], self.data[0]["polar"][0],
-                     [d["polar"][1] for d in self.data], self.view["log"])
+                     [d["polar"][1] for d in self.data], self.view["log"],
+                     [d["polar_more"] for d in self.data])
         f.draw_albedo(ALBEDO_THETAS, [d["albedo"] for d in self.data])
         f.draw_slices([d["slice"] for d in self.data])
         f.draw_densities([d["density"] for d in self.data])
@@ -338,6 +369,9 @@ def build(specs, theta_i: float = 30.0, scene=None):
     theta = pn.widgets.FloatSlider(label="θi (degrees)", start=0.0, end=89.0, value=theta_i,
                                    step=1.0, width=220)
     theta.param.watch(lambda e: x.set_view(theta_i=e.new), "value_throttled")
+    more = pn.widgets.TextInput(label="other θi (degrees, dashed)", placeholder="e.g. 0, 60",
+                                width=220, css_classes=["mb-more-thetas"])
+    more.param.watch(lambda e: x.set_view(more=e.new), "value")
     log = pn.widgets.Checkbox(label="log scale (log(1 + value))")
     log.param.watch(lambda e: x.set_view(log=e.new), "value")
     cosine = pn.widgets.Checkbox(label="times cosθo", value=True)
@@ -349,7 +383,7 @@ def build(specs, theta_i: float = 30.0, scene=None):
     for s in light:
         s.param.watch(lambda e: x.set_view(light=tuple(w.value for w in light)),
                       "value_throttled")
-    general = [theta, log, cosine, *(light if x.spheres.light is not None else [])]
+    general = [theta, more, log, cosine, *(light if x.spheres.light is not None else [])]
     if len(x.session.entries) > 1:
         button = pn.widgets.Button(label="fit the second BSDF to the first", color="primary")
         button.on_click(lambda e: x.fit())

@@ -14,6 +14,9 @@ import numpy as np
 #: One colour per BSDF, in the order given (Bokeh's Category10).
 COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728")
 
+#: The polar plot's curves at other incident angles than the slider's, at most.
+MORE_THETAS = 3
+
 #: Pixels of each small image on the page.
 TILE = 150
 
@@ -63,6 +66,13 @@ class Figures:
             self.albedo.line("t", "e", source=asrc, color=colour, legend_label=name,
                              line_width=2)
             self.albedo.varea("t", "lo", "hi", source=asrc, color=colour, alpha=0.2)
+        #: the curves at the other incident angles: per BSDF, :data:`MORE_THETAS` dashed ones
+        self.polar_more = [[ColumnDataSource(dict(x=[], y=[])) for _ in range(MORE_THETAS)]
+                           for _ in range(n)]
+        for sources, colour in zip(self.polar_more, COLOURS):
+            for k, src in enumerate(sources):
+                self.polar.line("x", "y", source=src, color=colour, line_width=1.5,
+                                line_dash=("dashed", "dotted", "dashdot")[k], alpha=0.8)
         self.incident = ColumnDataSource(dict(x=[], y=[]))
         self.polar.line("x", "y", source=self.incident, color="grey", line_dash="dashed")
         for f in (self.polar, self.albedo):
@@ -93,15 +103,23 @@ class Figures:
         f.image_rgba("image", source=src, x=0, y=0, dw=1, dh=1)
         return f, src
 
-    def draw_polar(self, theta_i_deg: float, theta_o_deg, curves, log: bool) -> None:
-        """Each BSDF's curve in polar form (radius: the value, or log(1 + value)), and the
-        incident direction dashed."""
+    def draw_polar(self, theta_i_deg: float, theta_o_deg, curves, log: bool,
+                   more=None) -> None:
+        """Each BSDF's curve in polar form (radius: the value, or log(1 + value)), its curves
+        at other incident angles (``more``: per BSDF, a list of curves) dashed, and the
+        slider's incident direction in grey."""
         t = np.radians(theta_o_deg)
         top = 0.0
-        for src, values in zip(self.polar_src, curves):
-            r = np.log1p(np.maximum(values, 0.0)) if log else np.asarray(values)
-            src.data = dict(x=r * np.sin(t), y=r * np.cos(t))
-            top = max(top, float(np.nanmax(r, initial=0.0)))
+        for main, extra, values, others in zip(self.polar_src, self.polar_more, curves,
+                                               more or [[] for _ in curves]):
+            shown = [values, *others] + [None] * MORE_THETAS
+            for src, v in zip([main, *extra], shown):
+                if v is None:
+                    src.data = dict(x=[], y=[])
+                    continue
+                r = np.log1p(np.maximum(v, 0.0)) if log else np.asarray(v)
+                src.data = dict(x=r * np.sin(t), y=r * np.cos(t))
+                top = max(top, float(np.nanmax(r, initial=0.0)))
         ti = np.radians(theta_i_deg)
         self.incident.data = dict(x=[0.0, -top * np.sin(ti)], y=[0.0, top * np.cos(ti)])
 

@@ -114,6 +114,24 @@ def test03_a_switch_menu_reloads_the_plugin(variant_llvm_ad_rgb, pn):
     assert '<string name="distribution" value="ggx"/>' in x.code["xml"].object
 
 
+def test09_the_polar_plot_at_several_incident_angles(variant_llvm_ad_rgb, pn):
+    """Two other θi typed: each BSDF gets their curves (the lobe at 60° is the polar view's
+    at 60°), none gives none back; a text that is no list of angles is refused on the
+    page."""
+    from mi_brdfs.explorer.app import build
+
+    x = build([GOLD]).explorer
+    assert x.set_view(more="0, 60")
+    main, (at0, at60, unused) = x.figures.polar_src[0], x.figures.polar_more[0]
+    theta_o, (want,) = x.session.polar(60.0)
+    t = np.radians(theta_o)
+    np.testing.assert_allclose(at60.data["y"], want * np.cos(t), rtol=1e-6, atol=1e-9)
+    assert len(at0.data["y"]) == len(main.data["y"]) and len(unused.data["y"]) == 0
+    for bad in ("sixty", "95", "1, 2, 3, 4"):
+        assert not x.set_view(more=bad) and "other θi" in x.message.object
+    assert x.set_view(more="") and len(at60.data["y"]) == 0 and not x.message.visible
+
+
 def test04_two_pages_keep_their_own_state(variant_llvm_ad_rgb, pn):
     from mi_brdfs.explorer.app import build
 

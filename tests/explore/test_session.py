@@ -124,3 +124,24 @@ def test05_switches_are_menus_that_reload_the_plugin(variant_llvm_ad_rgb):
     with pytest.raises(MiBrdfsError, match='"distribution" = "foo"'):
         gold.switch("distribution", "foo")
     assert gold.switches["distribution"][0] == "ggx"
+
+
+def test06_a_merl_file_and_an_xml_fragment(variant_llvm_ad_rgb):
+    """A MERL file (its path, as on the command line) is explored through the merl plugin,
+    with its interpolation switch as a menu; an XML fragment as given (no menus, its XML
+    shown as it came); the polar view of each is its eval."""
+    from helpers import merl_file
+
+    path = str(merl_file())
+    fragment = '<bsdf type="roughconductor"><float name="alpha" value="0.2"/></bsdf>'
+    session = Session([path, fragment])
+    measured, xml = session.entries
+    assert measured.spec["type"] == "merl" and "filter_type" in measured.switches
+    assert xml.switches == {} and xml.xml() == fragment
+    theta_o, curves = session.polar(40.0, n=31)
+    t = np.radians(theta_o)
+    wo = np.stack([np.sin(t), 0 * t, np.cos(t)], axis=1)
+    for spec, values in ((path, curves[0]), (fragment, curves[1])):
+        want = batch.evaluate(load_bsdf(spec), batch.direction(math.radians(-40.0)),
+                              wo).value.mean(axis=1)
+        np.testing.assert_allclose(values, want, rtol=1e-5, atol=1e-7)
