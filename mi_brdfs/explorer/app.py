@@ -269,10 +269,10 @@ class Explorer:
         rows = []
         cost = getattr(self, "cost", None)
         for i, (e, d) in enumerate(zip(self.session.entries, self.data)):
-            head = f"**{e.name}**"
+            head = f"**{i + 1}: {e.name}**"
             if cost:
                 head += f" — cost per sample: {cost[i]:.0f} ns ({cost[i] / cost[0]:.2f}× the first)"
-            items = [f"- {'✔' if v.ok else '✘'} {v.name}: {v.text}"
+            items = [f"- {'–' if v.skipped else '✔' if v.ok else '✘'} {v.text}"
                      for v in d.get("verdicts", [])] or ["- (checking…)"]
             rows.append("\n".join([head, *items]))
         self.verdicts.object = "\n\n".join(rows)
@@ -310,7 +310,7 @@ class Explorer:
 
         entry = self.session.entries[i]
         widgets = [pn.pane.Markdown(f"### <span style='color:{COLOURS[i]}'>■</span> "
-                                    f"{entry.name}")]
+                                    f"{i + 1}: {entry.name}")]
         for name, (value, options) in entry.switches.items():
             menu = pn.widgets.Select(label=name, options=[str(o).lower() if isinstance(o, bool)
                                                          else o for o in options],
@@ -400,7 +400,7 @@ def build(specs, theta_i: float = 30.0, scene=None):
         pn.Row(*x.columns, pn.Column(pn.pane.Markdown("### views"), *general)),
         pn.Row(pn.pane.Bokeh(f.polar, css_classes=["mb-polar"]),
                pn.pane.Bokeh(f.albedo, css_classes=["mb-albedo"]), x.lobe),
-        pn.Row(pn.Column(pn.pane.Markdown("**(θh, θd) slice, φd = 90°**"),
+        pn.Row(pn.Column(pn.pane.Markdown("**(θh, θd) slice, φd = 90°**: log₁₀ f (θh →, θd ↑)"),
                          pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.slices]),
                          css_classes=["mb-slice"]),
                pn.Column(pn.pane.Markdown("**sampled density / (f·cosθo / E)**, log₂ "

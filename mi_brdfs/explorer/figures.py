@@ -20,6 +20,9 @@ MORE_THETAS = 3
 #: Pixels of each small image on the page.
 TILE = 150
 
+#: The (θh, θd) slice's colour range: decades of f below its largest value.
+SLICE_DECADES = 3.0
+
 #: The sampling-density view's colour range: log₂ of density / (f·cosθo / E).
 RATIO_RANGE = 3.0
 
@@ -78,14 +81,16 @@ class Figures:
         for f in (self.polar, self.albedo):
             f.legend.label_text_font_size = "8pt"
             f.legend.background_fill_alpha = 0.6
-        self.slice_map = LinearColorMapper(palette="Viridis256", low=0.0, high=1.0)
+        self.slice_map = LinearColorMapper(palette="Viridis256", low=-1.0, high=0.0,
+                                           nan_color="white")
         self.density_map = LinearColorMapper(palette="RdBu11", low=-RATIO_RANGE,
                                              high=RATIO_RANGE, nan_color="white")
-        self.slices = [self._image(f"{name}: log(1 + f) over (θh, θd)", self.slice_map)
-                       for name in names]
-        self.densities = [self._image(f"{name}", self.density_map) for name in names]
-        self.spheres = [self._rgba(name) for name in names]
-        self.differences = [self._rgba(f"|{name} − first|") for name in names[1:]]
+        #: the small images' titles: the plugin's name and its place (the colours say which)
+        self.short = [f"{k + 1}: {name.split('(')[0]}" for k, name in enumerate(names)]
+        self.slices = [self._image(name, self.slice_map) for name in self.short]
+        self.densities = [self._image(name, self.density_map) for name in self.short]
+        self.spheres = [self._rgba(name) for name in self.short]
+        self.differences = [self._rgba(f"{name} − 1") for name in self.short[1:]]
 
     def _image(self, title, mapper):
         from bokeh.models import ColumnDataSource
@@ -129,16 +134,19 @@ class Figures:
             src.data = dict(t=list(thetas_deg), e=mean, lo=mean - 2 * err, hi=mean + 2 * err)
 
     def draw_slices(self, images) -> None:
-        """The (θh, θd) images (rows θd, columns θh), as log(1 + f) on one colour scale."""
-        logs = [np.log1p(np.maximum(np.nan_to_num(i, nan=0.0), 0.0)) for i in images]
-        self.slice_map.high = max(max(float(v.max()) for v in logs), 1e-6)
+        """The (θh, θd) images (rows θd, columns θh), as log₁₀ f on one colour scale over
+        :data:`SLICE_DECADES` decades below the largest value (a specular peak would leave
+        the rest of a linear scale dark), NaN (below the horizon) blank."""
+        logs = [np.log10(np.maximum(np.asarray(i, np.float64), 1e-30)) for i in images]
+        top = max(float(np.nanmax(v, initial=-30.0)) for v in logs)
+        self.slice_map.low, self.slice_map.high = top - SLICE_DECADES, top
         for (_, src), image in zip(self.slices, logs):
             src.data = dict(image=[image])
 
     def draw_densities(self, densities) -> None:
         """log₂ of the sampled density over f·cosθo/E per BSDF; its title gives the share of
         f·cosθo that importance sampling misses."""
-        for (f, src), name, d in zip(self.densities, self.names, densities):
+        for (f, src), name, d in zip(self.densities, self.short, densities):
             with np.errstate(divide="ignore", invalid="ignore"):
                 ratio = np.log2(d.histogram / d.target)
             ratio[~np.isfinite(ratio) | (d.target <= 0)] = np.nan
@@ -148,10 +156,11 @@ class Figures:
     def draw_spheres(self, images, differences, flips, passes: int) -> None:
         """The spheres (8-bit sRGB) with their passes, and each one's difference from the
         first with its mean FLIP."""
-        for (f, src), name, image in zip(self.spheres, self.names, images):
+        for (f, src), name, image in zip(self.spheres, self.short, images):
             src.data = dict(image=[rgba(image)])
             f.title.text = f"{name} ({passes} passes)"
-        for (f, src), name, image, value in zip(self.differences, self.names[1:], differences,
+        for (f, src), name, image, value in zip(self.differences, self.short[1:], differences,
                                                 flips):
             src.data = dict(image=[rgba(image)])
-            f.title.text = f"|{name} − first|: FLIP {value:.3f}"
+            f.title.text = f"{name.split(':')[0]} − 1: FLIP " + \
+                ("—" if value is None else f"{value:.3f}")
