@@ -16,7 +16,7 @@ PYTEST_ARGS ?=
 # The documents whose quoted figures make validate and make bench fill in from their reports
 QUOTING := $(foreach f,README.md $(wildcard docs/*.md),--readme $(f))
 
-.PHONY: all setup system render test test-slow test-full bench validate audit figures docs gallery clean distclean
+.PHONY: all setup system render test test-slow test-full bench validate audit figures docs gallery screenshots clean distclean
 
 all: test
 
@@ -78,6 +78,11 @@ figures: $(STAMP)
 # The plugin reference, docs/plugins/*.md, generated from the plugins' docstrings
 docs: $(STAMP)
 	$(PY) -m mi_brdfs.docgen
+
+# The screenshots of docs/explore.md (docs/explore/*.png): the page of mi-brdfs explore in
+# headless Chromium (Debian's chromium and chromium-driver, which the system step installs)
+screenshots: $(STAMP)
+	$(PY) tools/explore_screenshots.py
 
 # A gallery of every plugin and form at a few parameter values (docs/gallery.png)
 gallery: $(STAMP)

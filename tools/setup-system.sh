@@ -29,38 +29,46 @@ have_atomic() {
 }
 
 [ "$(uname -s)" = Linux ] || exit 0
-missing=""
-have_llvm || missing="$missing libllvm19"
-have_atomic || missing="$missing libatomic1"
-[ -z "$missing" ] || lib="$missing"
+lib=""
+have_llvm || lib="$lib libllvm19"
+have_atomic || lib="$lib libatomic1"
 browser=""
 [ -x /usr/bin/chromium ] || browser="$browser chromium"
 [ -x /usr/bin/chromedriver ] || browser="$browser chromium-driver"
-missing="$missing$browser"
-[ -z "$missing" ] && exit 0
+[ -z "$lib$browser" ] && exit 0
 
-# what goes without the missing packages, in one line
+# what goes without the packages $1, in words
 consequence() {
-  [ -n "${lib:-}" ] && printf 'mi_brdfs uses the scalar_rgb variant' && [ -n "$browser" ] && printf '; '
-  [ -n "$browser" ] && printf 'the browser test of mi-brdfs explore is skipped'
-  echo
+  case "$1" in
+    *llvm*|*atomic*) printf 'mi_brdfs uses the scalar_rgb variant' ;;
+    *) printf 'the browser test of mi-brdfs explore is skipped' ;;
+  esac
 }
 
 if ! command -v apt-get >/dev/null 2>&1; then
-  echo "setup: please install$missing with your package manager; until then $(consequence)"
+  for p in "$lib" "$browser"; do
+    [ -n "$p" ] && echo "setup: please install$p with your package manager; until then $(consequence "$p")"
+  done
   exit 0
 fi
 if [ "$(id -u)" -eq 0 ]; then SUDO=""
 elif command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then SUDO="sudo -n"
 else
-  echo "setup: not root: run 'sudo apt-get install$missing'; until then $(consequence)"
+  for p in "$lib" "$browser"; do
+    [ -n "$p" ] && echo "setup: not root: run 'sudo apt-get install$p'; until then $(consequence "$p")"
+  done
   exit 0
 fi
-echo "setup: installing$missing"
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get install -y -q --no-install-recommends $missing >/dev/null 2>&1 || {
-  $SUDO apt-get update -q >/dev/null 2>&1
-  $SUDO apt-get install -y -q --no-install-recommends $missing >/dev/null || \
-    echo "setup: apt-get could not install$missing; until then $(consequence)"
-}
+# the libraries and the browser apart: a distribution without the browser's packages (Ubuntu's
+# chromium is a snap) still gets the libraries
+for p in "$lib" "$browser"; do
+  [ -n "$p" ] || continue
+  echo "setup: installing$p"
+  $SUDO apt-get install -y -q --no-install-recommends $p >/dev/null 2>&1 || {
+    $SUDO apt-get update -q >/dev/null 2>&1
+    $SUDO apt-get install -y -q --no-install-recommends $p >/dev/null || \
+      echo "setup: apt-get could not install$p; until then $(consequence "$p")"
+  }
+done
 exit 0

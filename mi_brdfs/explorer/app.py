@@ -80,6 +80,15 @@ def _angles(text: str) -> tuple:
     return angles
 
 
+def _on_loop(callback):
+    """A widget's callback run on the server's event loop, with Bokeh's document lock (a
+    typed field's change arrives without it, and writing to the plots' sources then fails);
+    at once outside a server (a notebook, the tests)."""
+    import panel as pn
+
+    return lambda event: pn.state.execute(lambda: callback(event), schedule=True)
+
+
 def _shown(value) -> str:
     if isinstance(value, tuple):
         return ", ".join(f"{v:.4g}" for v in value)
@@ -116,6 +125,7 @@ class Explorer:
                                      css_classes=["mb-alert"])
         self.lobe = pn.pane.Plotly(None, width=460, height=380, css_classes=["mb-lobe3d"])
         self.verdicts = pn.pane.Markdown("", css_classes=["mb-verdicts"])
+        self.sphere_title = pn.pane.Markdown("")
         self.fit_result = pn.pane.Markdown("", css_classes=["mb-fit"])
         self.code = {kind: pn.pane.Markdown("", css_classes=[f"mb-{kind}"])
                      for kind in ("xml", "python")}
@@ -245,8 +255,11 @@ class Explorer:
         n = len(self.session.entries)
         self.figures.draw_spheres([self.spheres.image(i) for i in range(n)],
                                   [self.spheres.difference(i) for i in range(1, n)],
-                                  [self.spheres.flip(i) for i in range(1, n)],
-                                  self.spheres.passes)
+                                  [self.spheres.flip(i) for i in range(1, n)])
+        self.sphere_title.object = f"**{'scene' if self.spheres.light is None else 'spheres'}**" \
+            f" (Mitsuba's path tracer, progressive: {self.spheres.passes} passes of " \
+            f"{self.spheres.spp} samples per pixel; below: the difference from 1, blue " \
+            f"darker, red brighter, and FLIP)"
 
     def tick(self) -> None:
         """The timer's work, one piece at a time: a stale verdict, the cost per sample, else
@@ -316,8 +329,8 @@ class Explorer:
                                                          else o for o in options],
                                      value=str(value).lower() if isinstance(value, bool)
                                      else value, width=140)
-            menu.param.watch(lambda e, n=name, o=options: self.set_switch(
-                i, n, {str(v).lower(): v for v in o}[e.new]), "value")
+            menu.param.watch(_on_loop(lambda e, n=name, o=options: self.set_switch(
+                i, n, {str(v).lower(): v for v in o}[e.new])), "value")
             widgets.append(menu)
         self.sliders = getattr(self, "sliders", {})
         for control in entry.controls.values():
@@ -338,13 +351,13 @@ class Explorer:
             slider = pn.widgets.FloatSlider(label=label, start=lo, end=hi, step=(hi - lo) / 200,
                                             value=min(max(v, lo), hi), format="0.000",
                                             width=220)
-            slider.param.watch(lambda e, c=control, k=index: self.set_parameter(
-                i, c.key, _value(c, k, e.new)), "value_throttled")
+            slider.param.watch(_on_loop(lambda e, c=control, k=index: self.set_parameter(
+                i, c.key, _value(c, k, e.new))), "value_throttled")
             sliders.append(slider)
         field = pn.widgets.TextInput(label=control.label, value=_shown(control.value),
                                      width=120, css_classes=["mb-field"])
-        field.param.watch(lambda e, c=control: self.set_parameter(i, c.key, _typed(e.new)),
-                          "value")
+        field.param.watch(_on_loop(lambda e, c=control: self.set_parameter(
+            i, c.key, _typed(e.new))), "value")
         self.sliders[(i, control.key)] = (sliders, field)
         return pn.Row(pn.Column(*sliders, margin=0), field)
 
@@ -368,25 +381,25 @@ def build(specs, theta_i: float = 30.0, scene=None):
     x = Explorer(specs, theta_i, scene)
     theta = pn.widgets.FloatSlider(label="θi (degrees)", start=0.0, end=89.0, value=theta_i,
                                    step=1.0, width=220)
-    theta.param.watch(lambda e: x.set_view(theta_i=e.new), "value_throttled")
+    theta.param.watch(_on_loop(lambda e: x.set_view(theta_i=e.new)), "value_throttled")
     more = pn.widgets.TextInput(label="other θi (degrees, dashed)", placeholder="e.g. 0, 60",
                                 width=220, css_classes=["mb-more-thetas"])
-    more.param.watch(lambda e: x.set_view(more=e.new), "value")
+    more.param.watch(_on_loop(lambda e: x.set_view(more=e.new)), "value")
     log = pn.widgets.Checkbox(label="log scale (log(1 + value))")
-    log.param.watch(lambda e: x.set_view(log=e.new), "value")
+    log.param.watch(_on_loop(lambda e: x.set_view(log=e.new)), "value")
     cosine = pn.widgets.Checkbox(label="times cosθo", value=True)
-    cosine.param.watch(lambda e: x.set_view(cosine=e.new), "value")
+    cosine.param.watch(_on_loop(lambda e: x.set_view(cosine=e.new)), "value")
     light = [pn.widgets.FloatSlider(label=f"light {n} (degrees)", start=lo, end=hi, value=v,
                                     step=1.0, width=220)
              for n, lo, hi, v in (("θ", 0.0, 180.0, x.view["light"][0]),
                                   ("φ", -180.0, 180.0, x.view["light"][1]))]
     for s in light:
-        s.param.watch(lambda e: x.set_view(light=tuple(w.value for w in light)),
+        s.param.watch(_on_loop(lambda e: x.set_view(light=tuple(w.value for w in light))),
                       "value_throttled")
     general = [theta, more, log, cosine, *(light if x.spheres.light is not None else [])]
     if len(x.session.entries) > 1:
         button = pn.widgets.Button(label="fit the second BSDF to the first", color="primary")
-        button.on_click(lambda e: x.fit())
+        button.on_click(_on_loop(lambda e: x.fit()))
         general.append(button)
     copies = []
     for kind in ("xml", "python"):
@@ -398,22 +411,24 @@ def build(specs, theta_i: float = 30.0, scene=None):
     page = pn.Column(
         pn.pane.Markdown("# mi-brdfs explore"), x.message,
         pn.Row(*x.columns, pn.Column(pn.pane.Markdown("### views"), *general)),
-        pn.Row(pn.pane.Bokeh(f.polar, css_classes=["mb-polar"]),
-               pn.pane.Bokeh(f.albedo, css_classes=["mb-albedo"]), x.lobe),
-        pn.Row(pn.Column(pn.pane.Markdown("**(θh, θd) slice, φd = 90°**: log₁₀ f (θh →, θd ↑)"),
-                         pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.slices]),
-                         css_classes=["mb-slice"]),
-               pn.Column(pn.pane.Markdown("**sampled density / (f·cosθo / E)**, log₂ "
-                                          "(blue: oversampled, red: missed)"),
-                         pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.densities]),
-                         css_classes=["mb-density"])),
-        pn.Column(pn.pane.Markdown("**spheres** (Mitsuba's path tracer, progressive)"),
-                  pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.spheres]),
+        pn.Row(pn.Column(pn.pane.Bokeh(f.polar), css_classes=["mb-polar"]),
+               pn.Column(pn.pane.Bokeh(f.albedo), css_classes=["mb-albedo"]), x.lobe),
+        pn.Column(pn.pane.Markdown("**(θh, θd) slice, φd = 90°**: log₁₀ f (θh →, θd ↑)"),
+                  pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.slices]), css_classes=["mb-slice"]),
+        pn.Column(pn.pane.Markdown("**sampled density / (f·cosθo / E)**, log₂ over (φo →, "
+                                   "cosθo ↑) (blue: oversampled, red: missed)"),
+                  pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.densities]),
+                  css_classes=["mb-density"]),
+        x.sphere_title,
+        pn.Column(pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.spheres]),
                   pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.differences]),
                   css_classes=["mb-sphere"]),
         pn.Row(x.verdicts, x.fit_result),
         pn.Row(*copies))
     page.explorer = x
     page.session = x.session
-    pn.state.onload(lambda: pn.state.add_periodic_callback(x.tick, period=TICK_MS))
+    def start():
+        timer = pn.state.add_periodic_callback(x.tick, period=TICK_MS)
+        pn.state.on_session_destroyed(lambda context: timer.stop())
+    pn.state.onload(start)
     return page

@@ -18,7 +18,7 @@ COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728")
 MORE_THETAS = 3
 
 #: Pixels of each small image on the page.
-TILE = 150
+TILE = 170
 
 #: The (θh, θd) slice's colour range: decades of f below its largest value.
 SLICE_DECADES = 3.0
@@ -135,10 +135,12 @@ class Figures:
 
     def draw_slices(self, images) -> None:
         """The (θh, θd) images (rows θd, columns θh), as log₁₀ f on one colour scale over
-        :data:`SLICE_DECADES` decades below the largest value (a specular peak would leave
-        the rest of a linear scale dark), NaN (below the horizon) blank."""
+        :data:`SLICE_DECADES` decades below the 99th percentile of the values (on a linear
+        scale a peak leaves the rest dark), NaN (below the horizon) blank."""
         logs = [np.log10(np.maximum(np.asarray(i, np.float64), 1e-30)) for i in images]
-        top = max(float(np.nanmax(v, initial=-30.0)) for v in logs)
+        finite = np.concatenate([v[np.isfinite(v)] for v in logs])
+        # the 99th percentile: a grazing corner's 1/(cosθi·cosθo) would darken the rest
+        top = float(np.percentile(finite, 99.0)) if finite.size else 0.0
         self.slice_map.low, self.slice_map.high = top - SLICE_DECADES, top
         for (_, src), image in zip(self.slices, logs):
             src.data = dict(image=[image])
@@ -153,12 +155,11 @@ class Figures:
             src.data = dict(image=[np.clip(ratio, -RATIO_RANGE, RATIO_RANGE)])
             f.title.text = f"{name}: missed {100 * d.missed:.1f} %"
 
-    def draw_spheres(self, images, differences, flips, passes: int) -> None:
-        """The spheres (8-bit sRGB) with their passes, and each one's difference from the
-        first with its mean FLIP."""
-        for (f, src), name, image in zip(self.spheres, self.short, images):
+    def draw_spheres(self, images, differences, flips) -> None:
+        """The spheres (8-bit sRGB), and each one's difference from the first with its mean
+        FLIP."""
+        for (f, src), image in zip(self.spheres, images):
             src.data = dict(image=[rgba(image)])
-            f.title.text = f"{name} ({passes} passes)"
         for (f, src), name, image, value in zip(self.differences, self.short[1:], differences,
                                                 flips):
             src.data = dict(image=[rgba(image)])

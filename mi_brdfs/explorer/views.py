@@ -427,5 +427,5 @@ def lobe3d_figure(surfaces, names, colours) -> dict:
                         "yaxis": dict(axis, title="y"), "zaxis": dict(axis, title="z (normal)"),
                         "camera": {"eye": {"x": 1.4, "y": -1.4, "z": 0.9}}},
               "margin": {"l": 0, "r": 0, "t": 0, "b": 0}, "showlegend": len(names) > 1,
-              "legend": {"x": 0.0, "y": 1.0}}
+              "legend": {"x": 0.0, "y": 0.0}}  # (the top holds plotly's toolbar)
     return {"data": data, "layout": layout}
