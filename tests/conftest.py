@@ -135,14 +135,22 @@ def _variant(item) -> str:
     return ""
 
 
+#: Files whose tests start first: one long test (a server and a browser, most of a minute)
+#: collected late would run alone at the end of a two-worker run; first, the other worker
+#: takes the rest meanwhile.
+FIRST = ("tests/explore/test_browser.py",)
+
+
 def _by_variant(items) -> None:
     """Within each file, the tests in the order of their variant (stable otherwise): each
     switch into a JIT variant costs about 0.1 s in Mitsuba (it executes its AD integrators'
-    modules again), and a parametrized test alternates variants case by case."""
+    modules again), and a parametrized test alternates variants case by case. The files of
+    :data:`FIRST` first."""
     order = {}
     for i, item in enumerate(items):
         order.setdefault(item.nodeid.partition("::")[0], i)
-    items.sort(key=lambda item: (order[item.nodeid.partition("::")[0]], _variant(item)))
+    items.sort(key=lambda item: (item.nodeid.partition("::")[0] not in FIRST,
+                                 order[item.nodeid.partition("::")[0]], _variant(item)))
 
 
 #: The variants the fixtures and parametrized tests of this suite set.

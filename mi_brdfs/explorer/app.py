@@ -33,7 +33,7 @@ ALBEDO_SAMPLES = 4096
 
 #: The spheres' resolution, and the passes after which they stop refining.
 SPHERE_RES = 64
-SPHERE_PASSES = 64
+SPHERE_PASSES = 16
 
 #: The timer of the spheres' passes and the verdicts (milliseconds).
 TICK_MS = 150
@@ -115,7 +115,7 @@ class Explorer:
 
         self.session = Session(specs)
         self.view = {"theta_i": theta_i, "log": False, "cosine": True, "light": (45.0, 30.0),
-                     "more": ()}
+                     "more": (), "lobe": (25.0, -60.0)}
         self.figures = Figures([e.name for e in self.session.entries])
         self.spheres = spheres([e.bsdf for e in self.session.entries], scene,
                                self.view["light"])
@@ -123,7 +123,6 @@ class Explorer:
         self.stale = {"verdicts": set(range(len(self.data))), "cost": True}
         self.message = pn.pane.Alert("", alert_type="danger", visible=False,
                                      css_classes=["mb-alert"])
-        self.lobe = pn.pane.Plotly(None, width=460, height=380, css_classes=["mb-lobe3d"])
         self.verdicts = pn.pane.Markdown("", css_classes=["mb-verdicts"])
         self.sphere_title = pn.pane.Markdown("")
         self.fit_result = pn.pane.Markdown("", css_classes=["mb-fit"])
@@ -169,10 +168,11 @@ class Explorer:
         self._changed(i)
         return True
 
-    def set_view(self, theta_i=None, log=None, cosine=None, light=None, more=None) -> bool:
+    def set_view(self, theta_i=None, log=None, cosine=None, light=None, more=None,
+                 lobe=None) -> bool:
         """Change what the views show (θi, log scale, f or f·cosθo, the light, the polar
         plot's other incident angles: a text of up to three angles in degrees, which is
-        refused on the page where it is none)."""
+        refused on the page where it is none; the 3-D lobe's view: elevation, azimuth)."""
         old = dict(self.view)
         if more is not None:
             try:
@@ -181,7 +181,7 @@ class Explorer:
                 return self._refuse(e)
             self.message.visible = False
         for key, value in (("theta_i", theta_i), ("log", log), ("cosine", cosine),
-                           ("light", light), ("more", more)):
+                           ("light", light), ("more", more), ("lobe", lobe)):
             if value is not None:
                 self.view[key] = value
         if self.view["light"] != old["light"] and self.spheres.light is not None:
@@ -227,15 +227,14 @@ class Explorer:
             d["slice"] = views.slice_image(bsdf)
 
     def _draw(self) -> None:
-        f, names = self.figures, [e.name for e in self.session.entries]
+        f = self.figures
         f.draw_polar(self.view["theta_i"], self.data[0]["polar"][0],
                      [d["polar"][1] for d in self.data], self.view["log"],
                      [d["polar_more"] for d in self.data])
         f.draw_albedo(ALBEDO_THETAS, [d["albedo"] for d in self.data])
         f.draw_slices([d["slice"] for d in self.data])
         f.draw_densities([d["density"] for d in self.data])
-        self.lobe.object = views.lobe3d_figure([d["lobe"] for d in self.data], names,
-                                               COLOURS)
+        f.draw_lobe([d["lobe"] for d in self.data], *self.view["lobe"])
 
     def _draw_code(self) -> None:
         entries = self.session.entries
@@ -396,6 +395,13 @@ def build(specs, theta_i: float = 30.0, scene=None):
     for s in light:
         s.param.watch(_on_loop(lambda e: x.set_view(light=tuple(w.value for w in light))),
                       "value_throttled")
+    turn = [pn.widgets.FloatSlider(label=f"lobe {n} (degrees)", start=lo, end=hi, value=v,
+                                   step=1.0, width=200)
+            for n, lo, hi, v in (("elevation", -90.0, 90.0, x.view["lobe"][0]),
+                                 ("azimuth", -180.0, 180.0, x.view["lobe"][1]))]
+    for s in turn:  # (value, not value_throttled: turning the lobe computes nothing)
+        s.param.watch(_on_loop(lambda e: x.set_view(lobe=tuple(w.value for w in turn))),
+                      "value")
     general = [theta, more, log, cosine, *(light if x.spheres.light is not None else [])]
     if len(x.session.entries) > 1:
         button = pn.widgets.Button(label="fit the second BSDF to the first", color="primary")
@@ -412,7 +418,8 @@ def build(specs, theta_i: float = 30.0, scene=None):
         pn.pane.Markdown("# mi-brdfs explore"), x.message,
         pn.Row(*x.columns, pn.Column(pn.pane.Markdown("### views"), *general)),
         pn.Row(pn.Column(pn.pane.Bokeh(f.polar), css_classes=["mb-polar"]),
-               pn.Column(pn.pane.Bokeh(f.albedo), css_classes=["mb-albedo"]), x.lobe),
+               pn.Column(pn.pane.Bokeh(f.albedo), css_classes=["mb-albedo"]),
+               pn.Column(pn.pane.Bokeh(f.lobe), pn.Row(*turn), css_classes=["mb-lobe3d"])),
         pn.Column(pn.pane.Markdown("**(θh, θd) slice, φd = 90°**: log₁₀ f (θh →, θd ↑)"),
                   pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.slices]), css_classes=["mb-slice"]),
         pn.Column(pn.pane.Markdown("**sampled density / (f·cosθo / E)**, log₂ over (φo →, "

@@ -47,6 +47,41 @@ def _tile(title: str, width: int = TILE, height: int = TILE, x=(0, 1), y=(0, 1))
     return f
 
 
+def _screen(elevation_deg: float, azimuth_deg: float):
+    """(towards the viewer, the screen's right, its up) of an orthographic view from
+    ``elevation_deg`` above the surface's plane and ``azimuth_deg`` around its normal."""
+    e, a = np.radians(elevation_deg), np.radians(azimuth_deg)
+    view = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+    right = np.array([-np.sin(a), np.cos(a), 0.0])
+    return view, right, np.cross(view, right)
+
+
+def projected(x, y, z, elevation_deg: float, azimuth_deg: float):
+    """The quads of a surface given by grids ``x``, ``y``, ``z`` (as :func:`~mi_brdfs.
+    explorer.views.lobe3d` gives them) seen from the direction at ``elevation_deg`` above the
+    surface's plane and ``azimuth_deg`` around its normal (an orthographic view): each quad's
+    four corners on the screen (xs, ys: (quads, 4)), its depth towards the viewer and its
+    shade (0.3 + 0.7·|n·l|, a light above the viewer); quads of no area (where the lobe is
+    0) left out."""
+    view, right, up = _screen(elevation_deg, azimuth_deg)
+    p = np.stack([x, y, z], axis=-1)
+    corners = np.stack([p[:-1, :-1], p[1:, :-1], p[1:, 1:], p[:-1, 1:]], axis=2).reshape(-1, 4, 3)
+    normal = np.cross(corners[:, 2] - corners[:, 0], corners[:, 3] - corners[:, 1])
+    area = np.linalg.norm(normal, axis=1)
+    keep = area > 1e-12 * max(float(area.max(initial=0.0)), 1e-30)
+    corners, normal = corners[keep], normal[keep] / area[keep, None]
+    light = view + 0.5 * up
+    shade = 0.3 + 0.7 * np.abs(normal @ (light / np.linalg.norm(light)))
+    return corners @ right, corners @ up, corners.mean(axis=1) @ view, shade
+
+
+def _shaded(colour: str, shade: np.ndarray) -> list[str]:
+    """``colour`` (#rrggbb) darkened by ``shade`` (0 to 1), as #rrggbb strings."""
+    rgb = np.array([int(colour[k:k + 2], 16) for k in (1, 3, 5)], np.float64)
+    values = np.clip(np.round(shade[:, None] * rgb), 0, 255).astype(int)
+    return [f"#{r:02x}{g:02x}{b:02x}" for r, g, b in values]
+
+
 class Figures:
     """The Bokeh figures of a page for ``names`` (the BSDFs' names)."""
 
@@ -81,6 +116,17 @@ class Figures:
         for f in (self.polar, self.albedo):
             f.legend.label_text_font_size = "8pt"
             f.legend.background_fill_alpha = 0.6
+        self.lobe = figure(title="f·cosθo over the sphere of ωo (3-D lobe; ωi at φ = 0)",
+                           width=420, height=380, match_aspect=True, tools="pan,wheel_zoom,reset",
+                           toolbar_location="right")
+        self.lobe.axis.visible = False
+        self.lobe.grid.visible = False
+        self.lobe_src = ColumnDataSource(dict(xs=[], ys=[], colour=[]))
+        self.lobe.patches("xs", "ys", source=self.lobe_src, fill_color="colour",
+                          line_color="colour", line_width=0.5,
+                          fill_alpha=1.0 if n == 1 else 0.75)
+        self.lobe_axes = ColumnDataSource(dict(xs=[], ys=[]))
+        self.lobe.multi_line("xs", "ys", source=self.lobe_axes, color="grey", line_width=1)
         self.slice_map = LinearColorMapper(palette="Viridis256", low=-1.0, high=0.0,
                                            nan_color="white")
         self.density_map = LinearColorMapper(palette="RdBu11", low=-RATIO_RANGE,
@@ -127,6 +173,30 @@ class Figures:
                 top = max(top, float(np.nanmax(r, initial=0.0)))
         ti = np.radians(theta_i_deg)
         self.incident.data = dict(x=[0.0, -top * np.sin(ti)], y=[0.0, top * np.cos(ti)])
+
+    def draw_lobe(self, surfaces, elevation_deg: float, azimuth_deg: float) -> None:
+        """The lobes (:func:`~mi_brdfs.explorer.views.lobe3d`'s surfaces, one colour per
+        BSDF, shaded) seen from (elevation, azimuth), their quads drawn far to near (the
+        painter's order, all lobes together), with the surface's plane (a circle) and its
+        normal in grey."""
+        xs, ys, depth, colours = [], [], [], []
+        size = 0.0
+        for (x, y, z), colour in zip(surfaces, COLOURS):
+            px, py, d, shade = projected(x, y, z, elevation_deg, azimuth_deg)
+            xs.append(px), ys.append(py), depth.append(d)
+            colours += _shaded(colour, shade)
+            size = max(size, float(np.sqrt(np.max(x * x + y * y + z * z, initial=0.0))))
+        xs, ys, depth = np.concatenate(xs), np.concatenate(ys), np.concatenate(depth)
+        order = np.argsort(depth)
+        self.lobe_src.data = dict(xs=list(xs[order]), ys=list(ys[order]),
+                                  colour=[colours[k] for k in order])
+        t = np.linspace(0.0, 2.0 * np.pi, 65)
+        size = size or 1.0
+        ring = size * np.stack([np.cos(t), np.sin(t), 0.0 * t], axis=-1)
+        normal = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, size]])
+        _, right, up = _screen(elevation_deg, azimuth_deg)
+        self.lobe_axes.data = dict(xs=[list(ring @ right), list(normal @ right)],
+                                   ys=[list(ring @ up), list(normal @ up)])
 
     def draw_albedo(self, thetas_deg, rows) -> None:
         """E(θi) of each BSDF with a band of ± 2 standard errors."""

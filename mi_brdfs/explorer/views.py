@@ -13,8 +13,7 @@ Disney", SIGGRAPH course notes, and its BRDF Explorer tool) and more:
   representation", EGWR), BRDF Explorer's "image slice" and the plots of MERL's data;
 * :func:`sampling_density`: where ``sample()`` puts its directions against f·cosθo;
 * :func:`verdicts`: reciprocity, energy, positivity and a χ² test at the current θi;
-* :func:`cost_per_sample`: nanoseconds per ``sample()`` + ``eval()`` of each BSDF;
-* :func:`lobe3d_figure`: the lobes as a Plotly figure dict (one ``surface`` trace per BSDF).
+* :func:`cost_per_sample`: nanoseconds per ``sample()`` + ``eval()`` of each BSDF.
 
 Speed: each view is one or two vectorised calls of fixed sizes, so a parameter changed through
 ``mi.traverse`` (the same plugin object) launches the kernels the previous change compiled
@@ -404,28 +403,3 @@ def cost_per_sample(bsdfs, n: int = 2 ** 16, repeats: int = 5) -> list[float]:
     contenders = {k: run(b) for k, b in enumerate(bsdfs)}
     times = interleaved(contenders, repeats=repeats, timer=lambda fn: kernel_timed(fn)[1])
     return [median(times[k]) / n * 1e9 for k in contenders]
-
-
-def lobe3d_figure(surfaces, names, colours) -> dict:
-    """
-    A Plotly figure as a plain dict ``{'data': [...], 'layout': {...}}`` (for Panel's Plotly
-    pane): one ``surface`` trace per BSDF from its :func:`lobe3d` (x, y, z), in one flat
-    colour each, named, half transparent where several overlap; equal axes (``aspectmode``
-    'data'), the surface's plane z = 0 marked by the axes.
-    """
-    data = []
-    for (x, y, z), name, colour in zip(surfaces, names, colours):
-        # NumPy arrays, not lists: plotly validates a list element by element (~30 times
-        # slower for four 33 × 65 surfaces)
-        data.append({"type": "surface", "x": np.asarray(x), "y": np.asarray(y),
-                     "z": np.asarray(z), "name": name, "showscale": False,
-                     "showlegend": True, "colorscale": [[0.0, colour], [1.0, colour]],
-                     "opacity": 1.0 if len(names) == 1 else 0.6,
-                     "hovertemplate": f"{name}<extra></extra>"})
-    axis = {"zeroline": True, "showbackground": False, "title": ""}
-    layout = {"scene": {"aspectmode": "data", "xaxis": dict(axis, title="x"),
-                        "yaxis": dict(axis, title="y"), "zaxis": dict(axis, title="z (normal)"),
-                        "camera": {"eye": {"x": 1.4, "y": -1.4, "z": 0.9}}},
-              "margin": {"l": 0, "r": 0, "t": 0, "b": 0}, "showlegend": len(names) > 1,
-              "legend": {"x": 0.0, "y": 0.0}}  # (the top holds plotly's toolbar)
-    return {"data": data, "layout": layout}

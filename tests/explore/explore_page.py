@@ -116,7 +116,7 @@ class Server:
 
 
 @contextmanager
-def chromium(width: int = 1400, height: int = 2000):
+def chromium(width: int = 1400, height: int = 900):
     """A headless Chromium (a new empty profile, removed after) through the system's
     ChromeDriver, quit at the end of the ``with``; its console is read with
     ``driver.get_log('browser')``."""

@@ -44,7 +44,7 @@ def _views(x) -> dict:
         out[("albedo", i)] = np.array(f.albedo_src[i].data["e"])
         out[("slice", i)] = np.array(f.slices[i][1].data["image"][0])
         out[("density", i)] = np.array(f.densities[i][1].data["image"][0])
-        out[("lobe", i)] = np.array(x.lobe.object["data"][i]["z"], np.float64)
+        out[("lobe", i)] = np.array(x.data[i]["lobe"][2])
         out[("sphere", i)] = np.array(f.spheres[i][1].data["image"][0])
     return out
 
@@ -62,10 +62,11 @@ def test01_a_slider_moves_every_view_of_its_bsdf(variant_llvm_ad_rgb, pn):
 
     page = build([GOLD, TWIN])
     x = page.explorer
-    before = _views(x)
+    before, drawn = _views(x), np.concatenate(x.figures.lobe_src.data["ys"])
     (slider,), field = x.sliders[(0, "alpha.value")]
     _move(slider, -1.0)
     after = _views(x)
+    assert not _same(drawn, np.concatenate(x.figures.lobe_src.data["ys"]))  # the lobe drawn
     for (view, i), old in before.items():
         assert _same(old, after[(view, i)]) == (i == 1), (view, i)
     assert after[("polar", 0)].max() > 2 * before[("polar", 0)].max()  # narrower, taller

@@ -171,20 +171,23 @@ def test08_cost_per_sample_ranks_a_slower_bsdf(variant_llvm_ad_rgb):
     assert 0 < plain < slower and math.isfinite(slower) and slower > 2 * plain
 
 
-def test09_figure_is_a_plotly_dict(variant_llvm_ad_rgb):
-    """One named surface trace per BSDF with its arrays and colour, which plotly (what
-    Panel's Plotly pane draws it with) takes."""
-    a, b = views.lobe3d(load_bsdf(GREY), 30.0, n_theta=5, n_phi=7), \
-        views.lobe3d(load_bsdf(GOLD), 30.0, n_theta=5, n_phi=7)
-    fig = views.lobe3d_figure([a, b], ["grey", "gold"], ["#1f77b4", "#ff7f0e"])
-    assert set(fig) == {"data", "layout"} and len(fig["data"]) == 2
-    for trace, (x, y, z), name, colour in zip(fig["data"], (a, b), ("grey", "gold"),
-                                              ("#1f77b4", "#ff7f0e")):
-        assert trace["type"] == "surface" and trace["name"] == name
-        assert trace["colorscale"][0][1] == colour
-        np.testing.assert_array_equal(np.array(trace["z"]), z)
-    go = pytest.importorskip("plotly.graph_objs")
-    go.Figure(data=fig["data"], layout=fig["layout"])
+def test09_the_lobe_drawn_from_above_and_from_the_side(variant_llvm_ad_rgb):
+    """Lambert's lobe f·cosθo = (ρ/π)·cosθo is a sphere of diameter ρ/π through the origin,
+    centred on the normal: drawn from above (elevation 90°) its quads fill a disk of radius
+    ρ/(2π) about the origin, from the side (elevation 0) they span [0, ρ/π] upwards and
+    ±ρ/(2π) across; the light shades them between 0.3 and 1."""
+    from mi_brdfs.explorer.figures import projected
+
+    x, y, z = views.lobe3d(load_bsdf(GREY), 30.0, n_theta=48, n_phi=96)
+    d = np.mean(GREY["reflectance"]["value"]) / math.pi  # (the channels' mean)
+    xs, ys, _, shade = projected(x, y, z, 90.0, 0.0)
+    r = np.hypot(xs, ys)
+    assert r.max() == pytest.approx(d / 2, rel=0.02) and r.min() < 0.02 * d
+    xs, ys, depth, shade = projected(x, y, z, 0.0, 30.0)
+    assert ys.min() == pytest.approx(0.0, abs=1e-6) and ys.max() == pytest.approx(d, rel=0.02)
+    assert xs.min() == pytest.approx(-d / 2, rel=0.02) and xs.max() == pytest.approx(d / 2,
+                                                                                    rel=0.02)
+    assert 0.3 <= shade.min() and shade.max() <= 1.0 + 1e-9
 
 
 def test10_a_change_through_traverse_reuses_every_views_kernels(variant_llvm_ad_rgb,
