@@ -208,8 +208,15 @@ SLOW = {
         "test10_stability": DEEP,
     },
     "tests/explore/test_page.py": {
+        "test04_two_pages_keep_their_own_state": (
+            "two sessions: the browser test drives two windows at once"),
         "test05_the_server_serves_and_stops_on_sigterm": WHOLE,
         "test07_the_fit_button_fits_the_second_bsdf": WHOLE,
+    },
+    "tests/plugins/test_opaque_parameters.py": {
+        "test01_a_second_change_reuses_the_first_ones_kernels": (MORE, [
+            "orennayar-sigma.color1.value", "he-tau", "rtls-f_vol.value", "rtls-f_geo.value",
+            "rtls-f_iso.color0.value", "rpv-g.value", "hapke-b.value", "hapke-h.value"]),
     },
     "tests/plugins/test_cooktorrance_film.py": {
         "test06_compensated_white_furnace_with_a_film": DEEP,
