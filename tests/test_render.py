@@ -32,6 +32,9 @@ def test03_uneven_last_pass(variant_llvm_ad_rgb):
 
 
 def test04_time_budget_stops_early(variant_llvm_ad_rgb):
+    # a first render compiles the pass's kernel: a cold compile on a busy machine (a second
+    # before the budget is checked) is no pass started past the budget
+    render("furnace", spp=1, pass_spp=1, defines={"res": "8"}, progress=False)
     result = render("furnace", time_budget=0.5, pass_spp=1, defines={"res": "8"}, progress=False)
     assert 1 <= result.spp and result.wall_time < 0.5 + 0.5  # no pass starts past the budget
     assert result.passes == result.spp

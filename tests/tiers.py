@@ -208,8 +208,7 @@ SLOW = {
         "test10_stability": DEEP,
     },
     "tests/explore/test_page.py": {
-        "test04_two_pages_keep_their_own_state": (
-            "two sessions: the browser test drives two windows at once"),
+        "test04_two_pages_keep_their_own_state": DEEP,  # (the browser test: two windows)
         "test05_the_server_serves_and_stops_on_sigterm": WHOLE,
         "test07_the_fit_button_fits_the_second_bsdf": WHOLE,
     },
