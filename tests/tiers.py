@@ -212,6 +212,10 @@ SLOW = {
         "test05_the_server_serves_and_stops_on_sigterm": WHOLE,
         "test07_the_fit_button_fits_the_second_bsdf": WHOLE,
     },
+    "tests/explore/test_sphere.py": {
+        "test04_other_lights_light_the_side_towards_them": (MORE, ["point", "envmap"]),
+        "test07_a_scene_file_with_the_bsdf_swapped": DEEP,  # (test_page: the notebook's scene)
+    },
     "tests/plugins/test_opaque_parameters.py": {
         "test01_a_second_change_reuses_the_first_ones_kernels": (MORE, [
             "orennayar-sigma.color1.value", "he-tau", "rtls-f_vol.value", "rtls-f_geo.value",
