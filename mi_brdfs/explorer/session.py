@@ -8,8 +8,9 @@ plugin object, so the kernels traced for the views are reused (Mitsuba's documen
 
 Ranges of the sliders: Mitsuba's ``mi.traverse`` gives values, not ranges; a parameter's
 range is taken from its name (:data:`RANGES`: roughness, indices, reflectances, exponents,
-lengths), else from its value (0 to twice it), and a value typed beyond it is still accepted
-where the plugin accepts it.
+lengths), else from its value (0 to twice it), within the valid range our plugins check it
+against (``properties.VALID``, as the plugin read it), and a value typed beyond it is still
+accepted where the plugin accepts it.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ RANGES = (
     (r"^(int_ior|ext_ior|eta|film_eta)$", 1.0, 3.0, False),
     (r"^k$", 0.0, 10.0, False),
     (r"(reflectance|transmittance|albedo|weight)$", 0.0, 1.0, False),
-    (r"^(exponent|n|shininess|nu|nv)$", 1.0, 1e4, True),
+    (r"^(exponent(_\d+)?|n|shininess|nu|nv)$", 1.0, 1e4, True),
     (r"^(film_thickness|thickness)$", 1.0, 1e4, True),
     (r"^(sigma_s|sigma_a)$", 1e-3, 1e3, True),
     (r"^g$", -0.99, 0.99, False),
@@ -56,20 +57,24 @@ class Control:
         return self.key[:-len(".value")] if self.key.endswith(".value") else self.key
 
 
-def _range(key: str, low: float, high: float) -> tuple[float, float, bool]:
-    """(lo, hi, log) of a parameter from its last name, widened to its values (``low`` to
-    ``high``), else from its values."""
+def _range(key: str, low: float, high: float, valid=None) -> tuple[float, float, bool]:
+    """(lo, hi, log) of a parameter from its last name, else from its values; within the
+    plugin's ``valid`` range (lo, hi) where it is known; widened to its values (``low`` to
+    ``high``)."""
     name = key.split(".")[-2] if key.endswith(".value") else key.split(".")[-1]
-    for pattern, lo, hi, log in RANGES:
-        if re.search(pattern, name):
-            return (min(lo, low) if not log or low > 0 else lo), max(hi, high), log
-    return min(0.0, low), max(1.0, 2.0 * abs(high)), False
+    lo, hi, log = next(((lo, hi, log) for pattern, lo, hi, log in RANGES
+                        if re.search(pattern, name)), (0.0, max(1.0, 2.0 * abs(high)), False))
+    if valid is not None:
+        lo = lo if log and valid[0] <= 0.0 else max(lo, valid[0])
+        hi = min(hi, valid[1])
+    return (min(lo, low) if not log or low > 0 else lo), max(hi, high), log
 
 
-def controls(params) -> list[Control]:
+def controls(params, valid: dict | None = None) -> list[Control]:
     """A control for each parameter of ``params`` (``mi.traverse``) that is one number or one
     colour: the differentiable and the discontinuous ones alike; textures with more values
-    (bitmaps) and other types have none."""
+    (bitmaps) and other types have none. ``valid``: the plugin's valid range of each
+    parameter by name (``properties.VALID``), which bounds its slider."""
     import drjit as dr
 
     out = []
@@ -80,7 +85,9 @@ def controls(params) -> list[Control]:
         numbers = np.array(value, np.float64).ravel()
         if numbers.size not in (1, 3) or not np.all(np.isfinite(numbers)):
             continue
-        lo, hi, log = _range(key, float(numbers.min()), float(numbers.max()))
+        name = key[:-len(".value")] if key.endswith(".value") else key
+        lo, hi, log = _range(key, float(numbers.min()), float(numbers.max()),
+                             (valid or {}).get(name))
         shown = float(numbers[0]) if numbers.size == 1 else tuple(float(v) for v in numbers)
         out.append(Control(key, numbers.size, lo, hi, log, shown))
     return out
@@ -100,7 +107,7 @@ class Entry:
 
         bsdf = load_bsdf(spec)
         self.spec, self.bsdf, self.params = spec, bsdf, mi.traverse(bsdf)
-        self.controls = {c.key: c for c in controls(self.params)}
+        self.controls = {c.key: c for c in controls(self.params, _valid(spec))}
         #: the labels of the parameters set since loading (the dict and XML write those)
         self.changed = set()
 
@@ -207,6 +214,14 @@ class Entry:
         """The XML fragment that reproduces the BSDF with the current values."""
         spec = self.as_dict()
         return to_xml(spec if spec is not None else self.spec)
+
+
+def _valid(spec) -> dict:
+    """The valid range of each parameter of our plugin that ``spec`` loaded, as the plugin
+    read it (``properties.VALID``; none for Mitsuba's built-ins and XML)."""
+    from ..plugins.properties import VALID
+
+    return VALID.get(spec.get("type"), {}) if isinstance(spec, dict) else {}
 
 
 def _expanded(spec):

@@ -154,6 +154,7 @@ def texture(props, plugin: str, name: str, default: float, lo: float = 0.0, hi: 
     Returns → mi.Texture. Raises ParameterError for values out of range or not finite, and for
     properties that are neither numbers nor colours nor textures.
     """
+    VALID.setdefault(plugin, {})[name] = (lo, hi)
     T = _types()
     allowed = _range_text(lo, hi, lo_open)
     getter = props.get_texture if hi <= 1.0 else props.get_unbounded_texture
@@ -278,6 +279,7 @@ def roughness_at(alpha_u, alpha_v, si, active):
 def number(props, plugin: str, name: str, default: float, lo: float = -math.inf,
            hi: float = math.inf, lo_open: bool = False) -> float:
     """A plain number (not a texture), finite and within [``lo``, ``hi``]."""
+    VALID.setdefault(plugin, {})[name] = (lo, hi)
     if name not in props:
         return float(default)
     T = _types()
@@ -293,6 +295,10 @@ def number(props, plugin: str, name: str, default: float, lo: float = -math.inf,
 #: plugin has read, so that a tool offers a plugin's switches (``mi-brdfs explore``'s menus)
 #: from the plugin's own reading of them, not from a second list.
 SWITCHES: dict[str, dict[str, tuple]] = {}
+
+#: plugin → {parameter: (lo, hi)}: the valid range of every :func:`texture` and :func:`number`
+#: a plugin has read (its sliders' range in ``mi-brdfs explore``), likewise.
+VALID: dict[str, dict[str, tuple]] = {}
 
 
 def choice(props, plugin: str, name: str, default: str, choices) -> str:

@@ -32,6 +32,8 @@ def test01_controls_from_traverse(variant_llvm_ad_rgb):
         c = gold[key]
         assert c.channels == 3 and c.lo <= min(c.value) and max(c.value) <= c.hi
     assert white["reflectance.value"].channels == 3
+    rpv = Session(["rpv rho_0=0.05 k=0.6 g=-0.1"]).entries[0].controls
+    assert (rpv["k.value"].lo, rpv["k.value"].hi) == (0.0, 3.0)  # rpv's own range, not k's 10
     with pytest.raises(MiBrdfsError, match="1 to 4 BSDFs"):
         Session([GOLD] * 5)
 
