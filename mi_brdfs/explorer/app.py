@@ -95,13 +95,14 @@ def _shown(value) -> str:
     return f"{value:.4g}"
 
 
-def spheres(bsdfs, scene, light):
-    """The spheres of ``bsdfs`` under ``light`` (θ, φ), or with ``scene`` = (a scene file,
-    the id of its BSDF to replace) that scene's view under its own lights."""
+def spheres(bsdfs, scene, light, kind: str = "directional"):
+    """The spheres of ``bsdfs`` under a light of ``kind`` (:data:`~mi_brdfs.explorer.sphere.
+    LIGHTS`) from ``light`` (θ, φ), or with ``scene`` = (a scene file, the id of its BSDF to
+    replace) that scene's view under its own lights."""
     from .sphere import Spheres
 
     if scene is None:
-        return Spheres(bsdfs, res=SPHERE_RES, theta=light[0], phi=light[1])
+        return Spheres(bsdfs, res=SPHERE_RES, light=kind, theta=light[0], phi=light[1])
     return Spheres.from_scene(scene[0], bsdfs, scene[1])
 
 
@@ -115,7 +116,7 @@ class Explorer:
 
         self.session = Session(specs)
         self.view = {"theta_i": theta_i, "log": False, "cosine": True, "light": (45.0, 30.0),
-                     "more": (), "lobe": (25.0, -60.0)}
+                     "more": (), "lobe": (25.0, -60.0), "light_kind": "directional"}
         self.figures = Figures([e.name for e in self.session.entries])
         self.spheres = spheres([e.bsdf for e in self.session.entries], scene,
                                self.view["light"])
@@ -169,10 +170,11 @@ class Explorer:
         return True
 
     def set_view(self, theta_i=None, log=None, cosine=None, light=None, more=None,
-                 lobe=None) -> bool:
-        """Change what the views show (θi, log scale, f or f·cosθo, the light, the polar
-        plot's other incident angles: a text of up to three angles in degrees, which is
-        refused on the page where it is none; the 3-D lobe's view: elevation, azimuth)."""
+                 lobe=None, light_kind=None) -> bool:
+        """Change what the views show (θi, log scale, f or f·cosθo, the light's direction and
+        kind, the polar plot's other incident angles: a text of up to three angles in
+        degrees, which is refused on the page where it is none; the 3-D lobe's view:
+        elevation, azimuth)."""
         old = dict(self.view)
         if more is not None:
             try:
@@ -181,10 +183,15 @@ class Explorer:
                 return self._refuse(e)
             self.message.visible = False
         for key, value in (("theta_i", theta_i), ("log", log), ("cosine", cosine),
-                           ("light", light), ("more", more), ("lobe", lobe)):
+                           ("light", light), ("more", more), ("lobe", lobe),
+                           ("light_kind", light_kind)):
             if value is not None:
                 self.view[key] = value
-        if self.view["light"] != old["light"] and self.spheres.light is not None:
+        if self.view["light_kind"] != old["light_kind"] and self.spheres.light is not None:
+            self.spheres = spheres([e.bsdf for e in self.session.entries], None,
+                                   self.view["light"], self.view["light_kind"])
+            self._sphere_pass()
+        elif self.view["light"] != old["light"] and self.spheres.light is not None:
             self.spheres.set_light(*self.view["light"])
             self._sphere_pass()
         key = ("theta_i", "cosine", "more")
@@ -371,6 +378,57 @@ class Explorer:
         field.value = _shown(control.value)
 
 
+def _pair(pn, x, what: str, names, ranges, values, event: str = "value_throttled"):
+    """Two sliders (degrees) that set the view's ``what`` (a pair) together."""
+    sliders = [pn.widgets.FloatSlider(label=f"{what.replace('_', ' ')} {n} (degrees)",
+                                      start=lo, end=hi, value=v, step=1.0, width=210)
+               for n, (lo, hi), v in zip(names, ranges, values)]
+    for s in sliders:
+        s.param.watch(_on_loop(lambda e: x.set_view(**{what: tuple(w.value for w in sliders)})),
+                      event)
+    return sliders
+
+
+def _view_widgets(pn, x) -> list:
+    """The widgets of what the views show: θi and the other θi, log scale, f or f·cosθo, the
+    light (where the spheres have one: not a scene file's), the fit button (two BSDFs)."""
+    from .sphere import LIGHTS
+
+    theta = pn.widgets.FloatSlider(label="θi (degrees)", start=0.0, end=89.0,
+                                   value=x.view["theta_i"], step=1.0, width=210)
+    theta.param.watch(_on_loop(lambda e: x.set_view(theta_i=e.new)), "value_throttled")
+    more = pn.widgets.TextInput(label="other θi (degrees, dashed)", placeholder="e.g. 0, 60",
+                                width=210, css_classes=["mb-more-thetas"])
+    more.param.watch(_on_loop(lambda e: x.set_view(more=e.new)), "value")
+    log = pn.widgets.Checkbox(label="log scale (log(1 + value))")
+    log.param.watch(_on_loop(lambda e: x.set_view(log=e.new)), "value")
+    cosine = pn.widgets.Checkbox(label="times cosθo", value=True)
+    cosine.param.watch(_on_loop(lambda e: x.set_view(cosine=e.new)), "value")
+    out = [theta, more, log, cosine]
+    if x.spheres.light is not None:
+        kind = pn.widgets.Select(label="light", options=list(LIGHTS), value="directional",
+                                 width=140)
+        kind.param.watch(_on_loop(lambda e: x.set_view(light_kind=e.new)), "value")
+        out += [kind, *_pair(pn, x, "light", "θφ", ((0.0, 180.0), (-180.0, 180.0)),
+                             x.view["light"])]
+    if len(x.session.entries) > 1:
+        button = pn.widgets.Button(label="fit the second BSDF to the first", color="primary")
+        button.on_click(_on_loop(lambda e: x.fit()))
+        out.append(button)
+    return out
+
+
+def _code(pn, x) -> list:
+    """The XML and the Python of the BSDFs, each with its copy button."""
+    out = []
+    for kind in ("xml", "python"):
+        copy = pn.widgets.Button(label=f"copy {kind.upper() if kind == 'xml' else 'Python'}")
+        copy.js_on_click(args={"source": x.raw[kind]},
+                         code="navigator.clipboard.writeText(source.value)")
+        out.append(pn.Column(copy, x.raw[kind], x.code[kind]))
+    return out
+
+
 def build(specs, theta_i: float = 30.0, scene=None):
     """The page for ``specs`` (1 to 4 BSDFs, any form), in the current (JIT) variant; its
     :class:`Explorer` is ``page.explorer``; ``scene``: (a scene file, the id of the BSDF that
@@ -378,45 +436,13 @@ def build(specs, theta_i: float = 30.0, scene=None):
     import panel as pn
 
     x = Explorer(specs, theta_i, scene)
-    theta = pn.widgets.FloatSlider(label="θi (degrees)", start=0.0, end=89.0, value=theta_i,
-                                   step=1.0, width=220)
-    theta.param.watch(_on_loop(lambda e: x.set_view(theta_i=e.new)), "value_throttled")
-    more = pn.widgets.TextInput(label="other θi (degrees, dashed)", placeholder="e.g. 0, 60",
-                                width=220, css_classes=["mb-more-thetas"])
-    more.param.watch(_on_loop(lambda e: x.set_view(more=e.new)), "value")
-    log = pn.widgets.Checkbox(label="log scale (log(1 + value))")
-    log.param.watch(_on_loop(lambda e: x.set_view(log=e.new)), "value")
-    cosine = pn.widgets.Checkbox(label="times cosθo", value=True)
-    cosine.param.watch(_on_loop(lambda e: x.set_view(cosine=e.new)), "value")
-    light = [pn.widgets.FloatSlider(label=f"light {n} (degrees)", start=lo, end=hi, value=v,
-                                    step=1.0, width=220)
-             for n, lo, hi, v in (("θ", 0.0, 180.0, x.view["light"][0]),
-                                  ("φ", -180.0, 180.0, x.view["light"][1]))]
-    for s in light:
-        s.param.watch(_on_loop(lambda e: x.set_view(light=tuple(w.value for w in light))),
-                      "value_throttled")
-    turn = [pn.widgets.FloatSlider(label=f"lobe {n} (degrees)", start=lo, end=hi, value=v,
-                                   step=1.0, width=200)
-            for n, lo, hi, v in (("elevation", -90.0, 90.0, x.view["lobe"][0]),
-                                 ("azimuth", -180.0, 180.0, x.view["lobe"][1]))]
-    for s in turn:  # (value, not value_throttled: turning the lobe computes nothing)
-        s.param.watch(_on_loop(lambda e: x.set_view(lobe=tuple(w.value for w in turn))),
-                      "value")
-    general = [theta, more, log, cosine, *(light if x.spheres.light is not None else [])]
-    if len(x.session.entries) > 1:
-        button = pn.widgets.Button(label="fit the second BSDF to the first", color="primary")
-        button.on_click(_on_loop(lambda e: x.fit()))
-        general.append(button)
-    copies = []
-    for kind in ("xml", "python"):
-        copy = pn.widgets.Button(label=f"copy {kind.upper() if kind == 'xml' else 'Python'}")
-        copy.js_on_click(args={"source": x.raw[kind]},
-                         code="navigator.clipboard.writeText(source.value)")
-        copies.append(pn.Column(copy, x.raw[kind], x.code[kind]))
     f = x.figures
+    # turning the lobe computes nothing: it follows the slider as it moves
+    turn = _pair(pn, x, "lobe", ("elevation", "azimuth"), ((-90.0, 90.0), (-180.0, 180.0)),
+                 x.view["lobe"], "value")
     page = pn.Column(
         pn.pane.Markdown("# mi-brdfs explore"), x.message,
-        pn.Row(*x.columns, pn.Column(pn.pane.Markdown("### views"), *general)),
+        pn.Row(*x.columns, pn.Column(pn.pane.Markdown("### views"), *_view_widgets(pn, x))),
         pn.Row(pn.Column(pn.pane.Bokeh(f.polar), css_classes=["mb-polar"]),
                pn.Column(pn.pane.Bokeh(f.albedo), css_classes=["mb-albedo"]),
                pn.Column(pn.pane.Bokeh(f.lobe), pn.Row(*turn), css_classes=["mb-lobe3d"])),
@@ -431,9 +457,10 @@ def build(specs, theta_i: float = 30.0, scene=None):
                   pn.Row(*[pn.pane.Bokeh(g) for g, _ in f.differences]),
                   css_classes=["mb-sphere"]),
         pn.Row(x.verdicts, x.fit_result),
-        pn.Row(*copies))
+        pn.Row(*_code(pn, x)))
     page.explorer = x
     page.session = x.session
+
     def start():
         timer = pn.state.add_periodic_callback(x.tick, period=TICK_MS)
         pn.state.on_session_destroyed(lambda context: timer.stop())

@@ -133,6 +133,21 @@ def test09_the_polar_plot_at_several_incident_angles(variant_llvm_ad_rgb, pn):
     assert x.set_view(more="") and len(at60.data["y"]) == 0 and not x.message.visible
 
 
+def test10_the_light_moves_and_changes_kind(variant_llvm_ad_rgb, pn):
+    """The light moved, then made a point light: the sphere is rendered anew each time (its
+    first pass), with the new light: the images differ."""
+    from mi_brdfs.explorer.app import build
+
+    x = build(["lambert"]).explorer
+    image = lambda: np.array(x.figures.spheres[0][1].data["image"][0])  # noqa: E731
+    before = image()
+    x.set_view(light=(60.0, 180.0))
+    moved = image()
+    assert x.spheres.passes == 1 and not _same(before, moved)
+    x.set_view(light_kind="point")
+    assert x.spheres.light == "point" and x.spheres.passes == 1 and not _same(moved, image())
+
+
 def test04_two_pages_keep_their_own_state(variant_llvm_ad_rgb, pn):
     from mi_brdfs.explorer.app import build
 
