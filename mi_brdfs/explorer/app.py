@@ -89,6 +89,21 @@ def _on_loop(callback):
     return lambda event: pn.state.execute(lambda: callback(event), schedule=True)
 
 
+def _hex(rgb) -> str:
+    """A linear RGB colour in [0, 1] as the sRGB ``#rrggbb`` a colour picker shows."""
+    from ..imageio import to_srgb8
+
+    r, g, b = to_srgb8(np.array([[rgb]], np.float32))[0, 0]
+    return f"#{r:02x}{g:02x}{b:02x}"
+
+
+def _linear(hex_colour: str) -> tuple:
+    """A picked ``#rrggbb`` (sRGB) as linear RGB (IEC 61966-2-1's transfer function)."""
+    c = np.array([int(hex_colour[k:k + 2], 16) for k in (1, 3, 5)], np.float64) / 255.0
+    return tuple(float(v) for v in np.where(c <= 0.04045, c / 12.92,
+                                            ((c + 0.055) / 1.055) ** 2.4))
+
+
 def _shown(value) -> str:
     if isinstance(value, tuple):
         return ", ".join(f"{v:.4g}" for v in value)
@@ -362,20 +377,31 @@ class Explorer:
             sliders.append(slider)
         field = pn.widgets.TextInput(label=control.label, value=_shown(control.value),
                                      width=120, css_classes=["mb-field"])
-        field.param.watch(_on_loop(lambda e, c=control: self.set_parameter(
-            i, c.key, _typed(e.new))), "value")
-        self.sliders[(i, control.key)] = (sliders, field)
-        return pn.Row(pn.Column(*sliders, margin=0), field)
+        # (a value shown already is no change: the field follows the sliders too)
+        field.param.watch(_on_loop(lambda e, c=control: e.new != _shown(c.value) and
+                                   self.set_parameter(i, c.key, _typed(e.new))), "value")
+        widgets = [field]
+        if control.channels == 3 and control.hi <= 1.0:  # a reflectance: a colour too
+            picker = pn.widgets.ColorPicker(label="colour", value=_hex(control.value),
+                                            width=60)
+            picker.param.watch(_on_loop(lambda e, c=control: e.new != _hex(c.value) and
+                                        self.set_parameter(i, c.key, _linear(e.new))),
+                               "value")
+            widgets.append(picker)
+        self.sliders[(i, control.key)] = (sliders, widgets)
+        return pn.Row(pn.Column(*sliders, margin=0), *widgets)
 
     def _sync_widgets(self, i: int, key: str) -> None:
         """The field (and, for a typed value, the sliders) show the value now set."""
-        sliders, field = self.sliders[(i, key)]
+        sliders, (field, *picker) = self.sliders[(i, key)]
         control = self.session.entries[i].controls[key]
         values = [control.value] if control.channels == 1 else list(control.value)
         for slider, v in zip(sliders, values):
             v = math.log10(max(v, control.lo)) if control.log else v
             slider.value = min(max(v, slider.start), slider.end)
         field.value = _shown(control.value)
+        for p in picker:
+            p.value = _hex(control.value)
 
 
 def _pair(pn, x, what: str, names, ranges, values, event: str = "value_throttled"):

@@ -63,7 +63,7 @@ def test01_a_slider_moves_every_view_of_its_bsdf(variant_llvm_ad_rgb, pn):
     page = build([GOLD, TWIN])
     x = page.explorer
     before, drawn = _views(x), np.concatenate(x.figures.lobe_src.data["ys"])
-    (slider,), field = x.sliders[(0, "alpha.value")]
+    (slider,), (field,) = x.sliders[(0, "alpha.value")]
     _move(slider, -1.0)
     after = _views(x)
     assert not _same(drawn, np.concatenate(x.figures.lobe_src.data["ys"]))  # the lobe drawn
@@ -88,7 +88,7 @@ def test02_a_refused_value_is_shown_on_the_page(variant_llvm_ad_rgb, pn):
 
     x = build([GOLD]).explorer
     before, text = _views(x), x.code["xml"].object
-    field = x.sliders[(0, "alpha.value")][1]
+    field = x.sliders[(0, "alpha.value")][1][0]
     for typed, words in (("rough", "expected a number"),
                          ("-1", 'cooktorrance: parameter "alpha" = -1')):
         field.value = typed
@@ -146,6 +146,26 @@ def test10_the_light_moves_and_changes_kind(variant_llvm_ad_rgb, pn):
     assert x.spheres.passes == 1 and not _same(before, moved)
     x.set_view(light_kind="point")
     assert x.spheres.light == "point" and x.spheres.passes == 1 and not _same(moved, image())
+
+
+def test11_a_colour_picked_is_the_reflectance_in_linear_rgb(variant_llvm_ad_rgb, pn):
+    """A reflectance has a colour picker: #808080 picked sets ρ = 0.2158 in each channel
+    (sRGB 128/255 linearised, IEC 61966-2-1), once (the field and sliders that follow it set
+    nothing again); the slider's move shows in the picker."""
+    from mi_brdfs.explorer.app import build
+
+    x = build(["lambert reflectance=0.5,0.5,0.5"]).explorer
+    (r, g, b), (field, picker) = x.sliders[(0, "reflectance.value")]
+    calls = []
+    original = x.set_parameter
+    x.set_parameter = lambda *a: calls.append(a) or original(*a)
+    picker.value = "#808080"
+    assert len(calls) == 1
+    np.testing.assert_allclose(x.session.entries[0].controls["reflectance.value"].value,
+                               [0.21586] * 3, rtol=1e-4)
+    assert field.value == "0.2159, 0.2159, 0.2159" and r.value == pytest.approx(0.21586, 1e-4)
+    _move(g, 1.0)
+    assert len(calls) == 2 and picker.value == "#80ff80"
 
 
 def test04_two_pages_keep_their_own_state(variant_llvm_ad_rgb, pn):
