@@ -1,7 +1,7 @@
 """
 Calling a BSDF on many directions, in any variant, with NumPy arrays in and out: the layer the
 checks, the plots, the campaign and the benchmark share (public API: :func:`evaluate`,
-:func:`sample`, :func:`interaction`, :func:`random_directions`, :func:`direction`,
+:func:`eval_and_pdf`, :func:`sample`, :func:`interaction`, :func:`random_directions`, :func:`direction`,
 :func:`is_jit`).
 
 JIT variants take all directions in one vectorised call; scalar variants call the BSDF once per
@@ -18,6 +18,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..arrays import floats  # noqa: F401  (re-exported: the checks' NumPy → mi.Float)
 from ..bsdfspec import load_bsdf
 from ..reference.quadrature import direction  # noqa: F401  (re-exported for the checks)
 
@@ -44,22 +45,6 @@ def random_directions(rng: np.random.Generator, n: int, sphere: bool = True) -> 
 def _rows(a, n: int) -> np.ndarray:
     a = np.asarray(a, dtype=np.float64)
     return np.broadcast_to(a, (n, 3)) if a.ndim == 1 else a
-
-
-def floats(a) -> mi.Float:
-    """
-    A NumPy array as ``mi.Float`` in drjit's own alignment. drjit uses the memory of a
-    contiguous array in place, and the kernels it compiles for it depend on where that memory
-    starts: data at an arbitrary address compiles a kernel that the on-disk kernel cache has
-    not seen (a new LLVM compilation in every process); a copy aligned to 64 bytes, as drjit
-    aligns its own arrays, gives the cached kernel.
-    """
-    a = np.asarray(a, dtype=np.float32).ravel()
-    buffer = np.empty(a.nbytes + 64, dtype=np.uint8)
-    start = (-buffer.ctypes.data) % 64
-    out = buffer[start:start + a.nbytes].view(np.float32)
-    out[:] = a
-    return mi.Float(out)
 
 
 def vectors(a: np.ndarray):
@@ -160,6 +145,23 @@ def evaluate(bsdf, wi, wo, ctx=None, uv=None) -> Evaluation:
                      _channels(value2)[0], float(pdf2)))
     value, pdf, value2, pdf2 = zip(*rows)
     return Evaluation(np.array(value), np.array(pdf), np.array(value2), np.array(pdf2))
+
+
+def eval_and_pdf(bsdf, wi, wo, ctx=None) -> tuple[np.ndarray, np.ndarray]:
+    """(``eval`` (n, channels), ``pdf`` (n,)) at the pairs (wi, wo): the two alone, traced
+    together and evaluated in one launch in JIT variants (:func:`evaluate` also calls
+    ``eval_pdf``, and launches each: three times the work where those two are all a caller
+    needs, as the explorer's views)."""
+    if not is_jit():
+        e = evaluate(bsdf, wi, wo, ctx)
+        return e.value, e.pdf
+    bsdf, ctx = load_bsdf(bsdf), ctx or mi.BSDFContext()
+    wo = np.atleast_2d(np.asarray(wo, dtype=np.float64))
+    n = len(wo)
+    si, w = interaction(wi, n), vectors(wo)
+    value, pdf = bsdf.eval(ctx, si, w), bsdf.pdf(ctx, si, w)
+    dr.eval(value, pdf)
+    return _lanes(_channels(value), n), _lanes(pdf, n)
 
 
 def sample(bsdf, wi, sample1, sample2, ctx=None) -> Samples:

@@ -147,6 +147,10 @@ class Explorer:
         self.raw = {kind: pn.widgets.TextInput(value="", visible=False)
                     for kind in ("xml", "python")}
         self.columns = [pn.Column(css_classes=["mb-controls"]) for _ in self.session.entries]
+        #: (BSDF, parameter key) → (its sliders, [its field, its colour picker])
+        self.sliders = {}
+        #: nanoseconds per sample of each BSDF (None until the timer measures them)
+        self.cost = None
         for i in range(len(self.session.entries)):
             self._controls(i)
             self._compute(i)
@@ -245,7 +249,7 @@ class Explorer:
         d["lobe"] = views.lobe3d(bsdf, t)
         d["density"] = views.sampling_density(bsdf, t)
         if not incident_only:
-            d["albedo"] = self.session.albedo_of(i, ALBEDO_THETAS, ALBEDO_SAMPLES)
+            d["albedo"] = self.session.albedo(i, ALBEDO_THETAS, ALBEDO_SAMPLES)
             d["slice"] = views.slice_image(bsdf)
 
     def _draw(self) -> None:
@@ -301,7 +305,7 @@ class Explorer:
 
     def _draw_verdicts(self) -> None:
         rows = []
-        cost = getattr(self, "cost", None)
+        cost = self.cost
         for i, (e, d) in enumerate(zip(self.session.entries, self.data)):
             head = f"**{i + 1}: {e.name}**"
             if cost:
@@ -353,7 +357,6 @@ class Explorer:
             menu.param.watch(_on_loop(lambda e, n=name, o=options: self.set_switch(
                 i, n, {str(v).lower(): v for v in o}[e.new])), "value")
             widgets.append(menu)
-        self.sliders = getattr(self, "sliders", {})
         for control in entry.controls.values():
             widgets.append(self._control_row(pn, i, control))
         self.columns[i].objects = widgets

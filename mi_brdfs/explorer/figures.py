@@ -90,7 +90,6 @@ class Figures:
         from bokeh.plotting import figure
 
         n = len(names)
-        self.names = names
         self.polar = figure(title="f·cosθo in the plane of incidence", width=460, height=320,
                             match_aspect=True)
         self.albedo = figure(title="albedo E(θi) from sample() (± 2 standard errors)",

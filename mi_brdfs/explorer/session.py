@@ -267,15 +267,10 @@ class Session:
         curves = [lobe_values(e.bsdf, theta_i_deg, n, cosine) for e in self.entries]
         return curves[0][0], [values for _, values in curves]
 
-    def albedo(self, thetas_deg, n: int = 20_000):
-        """E(θi) of each BSDF from its ``sample()`` weights, with the standard errors:
-        [(means, errors)] over ``thetas_deg`` (the channels' mean)."""
-        return [self.albedo_of(i, thetas_deg, n) for i in range(len(self.entries))]
-
-    def albedo_of(self, i: int, thetas_deg, n: int = 20_000, seed: int = 0):
-        """E(θi) of BSDF ``i`` and its standard errors (:meth:`albedo`): the mean ``sample()``
-        weight of ``n`` samples per angle, all angles in one launch (one kernel, not one per
-        angle)."""
+    def albedo(self, i: int, thetas_deg, n: int = 20_000, seed: int = 0):
+        """E(θi) of BSDF ``i`` over ``thetas_deg`` and its standard errors (the channels'
+        mean): the mean ``sample()`` weight of ``n`` samples per angle, all angles in one
+        launch (one kernel, not one per angle)."""
         from ..checks import batch
 
         t = np.repeat(np.radians(np.asarray(thetas_deg, np.float64)), n)

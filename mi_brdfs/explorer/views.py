@@ -37,32 +37,12 @@ from ..plots import slice_directions
 THETA_MAX = 90.0
 
 
-def _grey(x, n: int) -> np.ndarray:
-    """A drjit spectrum of ``n`` lanes (or a width-1 constant) → (n,) float64, the mean of its
-    channels."""
-    a = np.array(mi.unpolarized_spectrum(x), dtype=np.float64)
-    a = a.reshape(1, -1) if a.ndim <= 1 else a
-    return np.broadcast_to(a.mean(axis=0), (n,)).copy()
-
-
-def _lanes(x, n: int) -> np.ndarray:
-    """A drjit Float of ``n`` lanes (or a width-1 constant) → (n,) float64."""
-    return np.broadcast_to(np.asarray(x, dtype=np.float64).ravel(), (n,)).copy()
-
-
 def eval_pdf(bsdf, wi, wo: np.ndarray, ctx=None) -> tuple[np.ndarray, np.ndarray]:
-    """
-    (``eval`` = f·|cosθo| as the mean of the channels, ``pdf``) at ``wi`` (one direction or
-    one per row) and the rows of ``wo`` (n, 3): the BSDF's own ``eval()`` and ``pdf()``, traced
-    together and evaluated in one launch (:func:`~mi_brdfs.checks.batch.evaluate` evaluates
-    ``eval``, ``pdf`` and ``eval_pdf`` one after the other: three times the work a view needs).
-    """
-    ctx = ctx or mi.BSDFContext()
-    n = len(wo)
-    si, w = batch.interaction(wi, n), batch.vectors(wo)
-    value, pdf = bsdf.eval(ctx, si, w), bsdf.pdf(ctx, si, w)
-    dr.eval(value, pdf)
-    return _grey(value, n), _lanes(pdf, n)
+    """(``eval`` = f·|cosθo| as the mean of the channels, ``pdf``) at ``wi`` (one direction or
+    one per row) and the rows of ``wo`` (n, 3), in one launch
+    (:func:`~mi_brdfs.checks.batch.eval_and_pdf`)."""
+    value, pdf = batch.eval_and_pdf(bsdf, wi, wo, ctx)
+    return value.mean(axis=1), pdf
 
 
 def _random(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -371,7 +351,7 @@ def verdicts(bsdf, theta_i_deg: float) -> list[Verdict]:
 
 
 # ---------------------------------------------------------------------------------------------
-# Cost, and the 3-D lobe as a Plotly figure
+# Cost
 
 
 @counts("n", "repeats")

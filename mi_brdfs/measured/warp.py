@@ -33,6 +33,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..arrays import floats
 from .lookup import azimuth
 
 #: Nodes of the density: incident angles θi in [0, π/2], and the (u, v) grid.
@@ -177,19 +178,6 @@ def _bilerp(c, x):
     return dr.lerp(dr.lerp(c[0], c[1], x.x), dr.lerp(c[2], c[3], x.x), x.y)
 
 
-def _floats(a: np.ndarray) -> mi.Float:
-    """``a`` as ``mi.Float`` from a copy that starts on a 64-byte line, as drjit aligns its own
-    arrays: drjit 1.5's CPU backend uses a NumPy array's memory as it is, and the kernels it
-    compiles for a gather from it depend on where that memory starts, so that a sampler
-    tabulated anew (a parameter set through ``mi.traverse``) would compile new kernels."""
-    a = np.asarray(a, dtype=np.float32).ravel()
-    raw = np.empty(a.nbytes + 64, np.uint8)
-    start = (-raw.ctypes.data) % 64
-    out = raw[start:start + a.nbytes].view(np.float32)
-    out[:] = a
-    return mi.Float(out)
-
-
 class Sampler:
     """
     A density of :func:`density` in the current variant: p(u, v | θi) bilinear between the
@@ -220,12 +208,12 @@ class Sampler:
         corners = corners.reshape(-1, 4).astype(np.float32)
         pairs = pairs.astype(np.float32)  # alias indices < 2**24: exact
         if dr.is_jit_v(mi.Float):  # scalar variants keep NumPy rows (:func:`gather_row`)
-            corners, pairs = _floats(corners), _floats(pairs)
+            corners, pairs = floats(corners), floats(pairs)
         self.corners, self.pairs = corners, pairs
         #: The largest albedo of the density's f at its nodes (0 without ``albedo``).
         self.albedo_max = 0.0 if albedo is None else float(np.max(albedo))
         if albedo is not None:
-            self.albedo_nodes = albedo if not dr.is_jit_v(mi.Float) else _floats(albedo)
+            self.albedo_nodes = albedo if not dr.is_jit_v(mi.Float) else floats(albedo)
 
     def _nodes(self, wi):
         """(i, w): ωi's θi lies between nodes i and i + 1, w the weight of i + 1."""

@@ -12,6 +12,7 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from ..arrays import aligned as _aligned  # (tests place the table elsewhere through it)
 from ..measured import data, lookup, warp
 from . import lobes, properties
 
@@ -63,19 +64,6 @@ def _stored(columns: np.ndarray) -> tuple[np.ndarray, float]:
     rows = np.zeros((len(columns), 4 if columns.shape[1] == 3 else 1), np.float16)
     rows[:, :columns.shape[1]] = columns / unit
     return rows, unit
-
-
-def _aligned(rows: np.ndarray, alignment: int = 64, offset: int = 0) -> np.ndarray:
-    """``rows`` copied to memory that starts on a cache line (a multiple of ``alignment``
-    bytes; ``offset`` bytes past one, for the comparison). drjit 1.5's CPU backend was seen to
-    use a large NumPy array's memory as it is, at NumPy's alignment of 16 bytes, where the
-    allocations it makes itself start at multiples of 64; the table 16 bytes past a line
-    renders much slower (``validation/merl_layout.py`` times both)."""
-    raw = np.empty(rows.nbytes + alignment, np.uint8)
-    start = (offset - raw.ctypes.data) % alignment
-    out = raw[start:start + rows.nbytes].view(rows.dtype).reshape(rows.shape)
-    out[...] = rows
-    return out
 
 
 class Table:
