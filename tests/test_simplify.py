@@ -232,7 +232,7 @@ def test04_wrong_candidate_rejected_and_caught(tmp_path, monkeypatch):
     speed-up would do (confidence 0); and the independent re-measurement of a file with that
     candidate exceeds the tolerance, so it would have caught it.
     """
-    mi_brdfs.use_variant("llvm_ad_rgb")
+    mi_brdfs.use_variant("scalar_rgb")
     real = simplify_pipeline.candidates_for
 
     def wrong(material, values, fit_fn):
