@@ -4,6 +4,7 @@ at module level or inside a function (a lazy import still ties the two modules t
 """
 
 import ast
+import functools
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "mi_brdfs"
@@ -12,6 +13,13 @@ PACKAGE = Path(__file__).resolve().parents[1] / "mi_brdfs"
 def _module_name(path: Path, root: Path) -> str:
     parts = list(path.relative_to(root.parent).with_suffix("").parts)
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+@functools.cache
+def _parsed(path: Path, mtime_ns: int) -> ast.Module:
+    """The module's syntax tree, parsed once per version of the file (several tests walk the
+    package's modules)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
 
 
 def import_graph(root: Path = PACKAGE) -> dict[str, set[str]]:
@@ -25,7 +33,7 @@ def import_graph(root: Path = PACKAGE) -> dict[str, set[str]]:
     graph = {name: set() for name in modules}
     for name, path in modules.items():
         package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(_parsed(path, path.stat().st_mtime_ns)):
             if isinstance(node, ast.Import):
                 targets = [a.name for a in node.names]
             elif isinstance(node, ast.ImportFrom):

@@ -455,7 +455,7 @@ def test10_materials_of_included_files_are_simplified(tmp_path, monkeypatch):
     _fake_timings(monkeypatch, (1.0, 1.0, 1.0))  # the choice, not a noisy timing, is tested
     # -D m=mat names the file: merged, nothing references $m, which Mitsuba would refuse
     result = simplify(only, TOLERANCE, output=out, cache=False, fits=False, repeats=3,
-                      variant="llvm_ad_rgb", **dict(SMALL, defines={"res": "16", "m": "mat"}))
+                      variant="scalar_rgb", **dict(SMALL, defines={"res": "16", "m": "mat"}))
     assert [m.label for m in result.materials] == ["inc"]
     material = result.materials[0]
     assert material.candidates[material.chosen].label.startswith("diffuse"), result.summary()

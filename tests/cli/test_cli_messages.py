@@ -61,7 +61,7 @@ def test03_a_warning_is_printed_once_per_command(tmp_path, monkeypatch, capsys):
     pytest.importorskip("matplotlib")
     monkeypatch.chdir(tmp_path)
     assert main(["plot", "lobe", "ward diffuse_reflectance=0.6 specular_reflectance=0.5",
-                 "--variant", "scalar_rgb"]) == 0
+                 "--variant", "llvm_ad_rgb"]) == 0
     warned = [line for line in capsys.readouterr().err.splitlines() if "warning" in line]
     assert len(warned) == 1 and "reaches 1.1 > 1" in warned[0] and \
         "values kept" in warned[0], warned

@@ -46,6 +46,25 @@ const cls = arguments[0], root = arguments[1] || document, found = [];
 return found;
 """
 
+#: The bounding rectangles (viewport pixels) of the elements of each class in ``arguments[0]``,
+#: by class, in one walk of the document and its shadow roots.
+RECTS_JS = """
+const classes = arguments[0], found = {};
+for (const cls of classes) found[cls] = [];
+(function walk(node) {
+  for (const el of node.querySelectorAll('*')) {
+    for (const cls of classes) {
+      if (el.classList.contains(cls)) {
+        const r = el.getBoundingClientRect();
+        found[cls].push({x: r.x, y: r.y, width: r.width, height: r.height});
+      }
+    }
+    if (el.shadowRoot) walk(el.shadowRoot);
+  }
+})(document);
+return found;
+"""
+
 #: The text of an element, shadow roots included (Panel's panes keep their text in them).
 TEXT_JS = """
 function text(node) {
@@ -153,6 +172,11 @@ def one(driver, cls: str, root=None):
     return found[0]
 
 
+def rects(driver, classes) -> dict:
+    """{class: [its elements' rectangles (x, y, width, height; viewport pixels)]}."""
+    return driver.execute_script(RECTS_JS, list(classes))
+
+
 def text(driver, element) -> str:
     return driver.execute_script(TEXT_JS, element)
 
@@ -161,9 +185,10 @@ def shown(driver, element) -> bool:
     return driver.execute_script(SHOWN_JS, element)
 
 
-def until(condition, timeout: float, what: str, poll: float = 0.1):
+def until(condition, timeout: float, what: str, poll: float = 0.25):
     """``condition()``'s first true value within ``timeout`` seconds; AssertionError that
-    names ``what`` otherwise."""
+    names ``what`` otherwise. Polled every ``poll`` seconds: each look at the page walks its
+    thousands of elements in Chromium, which shares the machine's cores with the server."""
     end = time.monotonic() + timeout
     while True:
         value = condition()
@@ -187,8 +212,8 @@ def drawn(driver, timeout: float = 60.0, views_after_text: float = 15.0) -> None
         if "<bsdf" not in "".join(text(driver, e) for e in find(driver, "mb-xml")):
             return False
         since.append(time.monotonic())
-        missing = [cls for cls in VIEWS
-                   if not any(e.rect["height"] for e in find(driver, cls))]
+        sized = rects(driver, VIEWS)
+        missing = [cls for cls in VIEWS if not any(r["height"] for r in sized[cls])]
         assert not missing or time.monotonic() - since[0] < views_after_text, \
             f"no element of class {', '.join(missing)} with a size on the page"
         return not missing

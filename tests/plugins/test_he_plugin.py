@@ -129,7 +129,7 @@ def test04_spectral_variants_evaluate_at_the_sampled_wavelengths(np_rng):
     assert_matches_reference(np.array(value).T, f, wi, wo, RTOL, "he spectral")
 
 
-def test05_the_delta_weight_and_probability(variant_llvm_ad_rgb):
+def test05_the_delta_weight_and_probability(variant_scalar_rgb):
     """A sample of the delta: ωo = M(ωi), bs.pdf = its probability ρ̄_s/(ρ̄_s + E_dd + a)
     (E_dd the tabulated albedo), weight·pdf = ρ_s·specular_reflectance. A mixture that took
     the delta for a density (the lobe not marked delta) is rejected."""
