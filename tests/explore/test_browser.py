@@ -199,7 +199,7 @@ def _type(driver, name, value):
 
 def _pictures(driver) -> dict:
     """{view's class: its pixels, an (h, w, 3) float array}, cut from one screenshot of the
-    window (one screenshot costs Chromium about as much as one of an element)."""
+    window (one for the six views: Chromium encodes each screenshot as a PNG)."""
     from PIL import Image
 
     fits = driver.execute_script(
