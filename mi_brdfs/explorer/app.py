@@ -139,6 +139,9 @@ class Explorer:
         self.stale = {"verdicts": set(range(len(self.data))), "cost": True}
         self.message = pn.pane.Alert("", alert_type="danger", visible=False,
                                      css_classes=["mb-alert"])
+        #: what the plugins say of their values (their MiBrdfsWarnings), beside the message
+        self.said = pn.pane.Alert("", alert_type="warning", visible=False,
+                                  css_classes=["mb-warnings"])
         self.verdicts = pn.pane.Markdown("", css_classes=["mb-verdicts"])
         self.sphere_title = pn.pane.Markdown("")
         self.fit_result = pn.pane.Markdown("", css_classes=["mb-fit"])
@@ -156,6 +159,7 @@ class Explorer:
             self._compute(i)
         self._draw()
         self._draw_code()
+        self._draw_warnings()
         self._sphere_pass()
 
     # -- what a change does -------------------------------------------------------------
@@ -232,6 +236,7 @@ class Explorer:
         self._compute(i)
         self._draw()
         self._draw_code()
+        self._draw_warnings()
         plots = time.perf_counter()
         self.stale["verdicts"].add(i)
         self._sphere_pass()
@@ -269,6 +274,11 @@ class Explorer:
             self.raw[kind].value = "\n\n".join(texts)
             self.code[kind].object = "\n\n".join(
                 f"**{e.name}**\n```{fence}\n{text}\n```" for e, text in zip(entries, texts))
+
+    def _draw_warnings(self) -> None:
+        lines = [f"**{i + 1}: {e.name}**: {said}"
+                 for i, e in enumerate(self.session.entries) for said in e.warnings]
+        self.said.object, self.said.visible = "\n\n".join(lines), bool(lines)
 
     def _sphere_pass(self) -> None:
         """Start the spheres anew and show their first pass."""
@@ -470,7 +480,7 @@ def build(specs, theta_i: float = 30.0, scene=None):
     turn = _pair(pn, x, "lobe", ("elevation", "azimuth"), ((-90.0, 90.0), (-180.0, 180.0)),
                  x.view["lobe"], "value")
     page = pn.Column(
-        pn.pane.Markdown("# mi-brdfs explore"), x.message,
+        pn.pane.Markdown("# mi-brdfs explore"), x.message, x.said,
         pn.Row(*x.columns, pn.Column(pn.pane.Markdown("### views"), *_view_widgets(pn, x))),
         pn.Row(pn.Column(pn.pane.Bokeh(f.polar), css_classes=["mb-polar"]),
                pn.Column(pn.pane.Bokeh(f.albedo), css_classes=["mb-albedo"]),

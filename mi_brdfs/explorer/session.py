@@ -17,12 +17,13 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..bsdfspec import describe, load_bsdf, parse, to_xml
-from ..errors import MiBrdfsError
+from ..errors import MiBrdfsError, MiBrdfsWarning
 
 #: Up to this many BSDFs side by side.
 MAX_BSDFS = 4
@@ -93,9 +94,26 @@ def controls(params, valid: dict | None = None) -> list[Control]:
     return out
 
 
+def _heard(action):
+    """(``action()``, the messages of the MiBrdfsWarnings it gave, each once): what a plugin
+    says of the values it was given (e.g. a form that reflects more than it receives), which
+    the page shows beside the BSDF; other warnings pass on as they were."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = action()
+    said = []
+    for w in caught:
+        if issubclass(w.category, MiBrdfsWarning):
+            said.append(str(w.message))
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return result, list(dict.fromkeys(said))
+
+
 class Entry:
     """One BSDF of a session: the spec it was given as, the loaded ``mi.BSDF``, its
-    parameters and controls."""
+    parameters and controls; ``warnings``: what its plugin said of the values as they are
+    (when it last loaded them or checked a new one)."""
 
     def __init__(self, spec):
         spec = parse(spec)
@@ -105,8 +123,9 @@ class Entry:
     def _load(self, spec) -> None:
         import mitsuba as mi
 
-        bsdf = load_bsdf(spec)
+        bsdf, said = _heard(lambda: load_bsdf(spec))
         self.spec, self.bsdf, self.params = spec, bsdf, mi.traverse(bsdf)
+        self.warnings = said
         self.controls = {c.key: c for c in controls(self.params, _valid(spec))}
         #: the labels of the parameters set since loading (the dict and XML write those)
         self.changed = set()
@@ -152,7 +171,7 @@ class Entry:
             raise MiBrdfsError(f"{self.name}: no parameter {key!r} (it has: "
                                f"{', '.join(self.controls) or 'none'})")
         numbers = _numbers(self.name, control, value)
-        self._validate(control, numbers)
+        checked, said = _heard(lambda: self._validate(control, numbers))
         old = self.params[key]
         new = type(old)(*numbers) if control.channels == 3 else type(old)(numbers[0])
         dr.make_opaque(new)  # an input of the kernels, not a literal traced into their code
@@ -167,14 +186,19 @@ class Entry:
         dr.eval(self.params[key])
         control.value = numbers[0] if control.channels == 1 else tuple(numbers)
         self.changed.add(control.label)
+        if checked:
+            self.warnings = said
 
-    def _validate(self, control: Control, numbers: list[float]) -> None:
+    def _validate(self, control: Control, numbers: list[float]) -> bool:
         """Where the BSDF was given as a dict, the plugin's own checks of the new value: the
         dict with it is loaded (and dropped), and what the plugin refuses is raised in its
-        own words (``mi.traverse`` updates are not checked by every plugin)."""
+        own words (``mi.traverse`` updates are not checked by every plugin). Whether it was
+        checked."""
         if isinstance(self.spec, dict) and "." not in control.label:
             value = numbers[0] if control.channels == 1 else tuple(numbers)
             load_bsdf(self.as_dict({control.label: value}))
+            return True
+        return False
 
     def values(self) -> dict:
         """The controls' current values by label."""

@@ -167,6 +167,17 @@ def test11_a_colour_picked_is_the_reflectance_in_linear_rgb(variant_llvm_ad_rgb,
     assert len(calls) == 2 and picker.value == "#80ff80"
 
 
+def test12_what_the_plugin_says_is_shown_beside_the_bsdf(variant_llvm_ad_rgb, pn):
+    """Ward reflecting 1.1 > 1: its plugin's warning is on the page (not in the terminal),
+    and goes when a typed ρs brings the sum below 1."""
+    from mi_brdfs.explorer.app import build
+
+    x = build(["ward diffuse_reflectance=0.6 specular_reflectance=0.5"]).explorer
+    assert x.said.visible and "**1: ward(" in x.said.object and "1.1 > 1" in x.said.object
+    x.sliders[(0, "specular_reflectance.value")][1][0].value = "0.2"
+    assert not x.said.visible and not x.message.visible
+
+
 def test04_two_pages_keep_their_own_state(variant_llvm_ad_rgb, pn):
     from mi_brdfs.explorer.app import build
 

@@ -147,3 +147,28 @@ def test06_a_merl_file_and_an_xml_fragment(variant_llvm_ad_rgb):
         want = batch.evaluate(load_bsdf(spec), batch.direction(math.radians(-40.0)),
                               wo).value.mean(axis=1)
         np.testing.assert_allclose(values, want, rtol=1e-5, atol=1e-7)
+
+
+def test07_what_the_plugin_says_is_kept_for_the_page(variant_llvm_ad_rgb):
+    """Ward with ρd + ρs = 1.1 > 1: its plugin's warning is the entry's (for the page), not
+    printed; a value that brings the sum below 1 clears it, one above brings it back; a
+    warning of another kind passes on."""
+    import warnings
+
+    from mi_brdfs.errors import MiBrdfsWarning
+
+    with warnings.catch_warnings(record=True) as outside:
+        warnings.simplefilter("always")
+        entry = Session(["ward diffuse_reflectance=0.6 specular_reflectance=0.5"]).entries[0]
+        (said,) = entry.warnings
+        assert said.startswith("ward: ") and "1.1 > 1" in said
+        entry.set("specular_reflectance.value", 0.2)
+        assert entry.warnings == []
+        entry.set("specular_reflectance.value", 0.6)
+        assert len(entry.warnings) == 1 and "1.2 > 1" in entry.warnings[0]
+        from mi_brdfs.explorer import session
+
+        _, heard = session._heard(lambda: warnings.warn("other", DeprecationWarning))
+    assert heard == []
+    assert [str(w.message) for w in outside] == ["other"]
+    assert not any(issubclass(w.category, MiBrdfsWarning) for w in outside)
