@@ -178,6 +178,13 @@ def to_srgb8(image: np.ndarray, exposure: float = 0.0) -> np.ndarray:
     return np.round(srgb * 255.0).astype(np.uint8)
 
 
+def from_srgb8(values) -> np.ndarray:
+    """8-bit sRGB values → linear (float64), the inverse of :func:`to_srgb8`'s transfer
+    function (IEC 61966-2-1)."""
+    c = np.asarray(values, np.float64) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
 def write_png(path: str | os.PathLike, image: np.ndarray, exposure: float = 0.0) -> Path:
     """Write an sRGB 8-bit PNG preview of a linear image (via Mitsuba's Bitmap writer)."""
     import mitsuba as mi

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import MiBrdfsError
 from . import views
-from .figures import COLOURS, Figures
+from .figures import COLOURS, Figures, hex_rgb, rgb_hex
 from .session import Session
 
 #: The albedo view's incident angles (degrees) and samples per angle.
@@ -93,15 +93,14 @@ def _hex(rgb) -> str:
     """A linear RGB colour in [0, 1] as the sRGB ``#rrggbb`` a colour picker shows."""
     from ..imageio import to_srgb8
 
-    r, g, b = to_srgb8(np.array([[rgb]], np.float32))[0, 0]
-    return f"#{r:02x}{g:02x}{b:02x}"
+    return rgb_hex(to_srgb8(np.array([[rgb]], np.float32))[0, 0])
 
 
 def _linear(hex_colour: str) -> tuple:
-    """A picked ``#rrggbb`` (sRGB) as linear RGB (IEC 61966-2-1's transfer function)."""
-    c = np.array([int(hex_colour[k:k + 2], 16) for k in (1, 3, 5)], np.float64) / 255.0
-    return tuple(float(v) for v in np.where(c <= 0.04045, c / 12.92,
-                                            ((c + 0.055) / 1.055) ** 2.4))
+    """A picked ``#rrggbb`` (sRGB) as linear RGB."""
+    from ..imageio import from_srgb8
+
+    return tuple(float(v) for v in from_srgb8(hex_rgb(hex_colour)))
 
 
 def _shown(value) -> str:

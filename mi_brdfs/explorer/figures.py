@@ -75,11 +75,21 @@ def projected(x, y, z, elevation_deg: float, azimuth_deg: float):
     return corners @ right, corners @ up, corners.mean(axis=1) @ view, shade
 
 
+def hex_rgb(colour: str) -> np.ndarray:
+    """``#rrggbb`` → its three 8-bit values."""
+    return np.array([int(colour[k:k + 2], 16) for k in (1, 3, 5)])
+
+
+def rgb_hex(rgb) -> str:
+    """Three 8-bit values → ``#rrggbb``."""
+    r, g, b = (int(v) for v in rgb)
+    return f"#{r:02x}{g:02x}{b:02x}"
+
+
 def _shaded(colour: str, shade: np.ndarray) -> list[str]:
     """``colour`` (#rrggbb) darkened by ``shade`` (0 to 1), as #rrggbb strings."""
-    rgb = np.array([int(colour[k:k + 2], 16) for k in (1, 3, 5)], np.float64)
-    values = np.clip(np.round(shade[:, None] * rgb), 0, 255).astype(int)
-    return [f"#{r:02x}{g:02x}{b:02x}" for r, g, b in values]
+    values = np.clip(np.round(shade[:, None] * hex_rgb(colour)), 0, 255)
+    return [rgb_hex(v) for v in values]
 
 
 class Figures:

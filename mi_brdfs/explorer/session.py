@@ -55,14 +55,20 @@ class Control:
     @property
     def label(self) -> str:
         """The parameter's name without Mitsuba's ``.value`` suffix."""
-        return self.key[:-len(".value")] if self.key.endswith(".value") else self.key
+        return _label(self.key)
+
+
+def _label(key: str) -> str:
+    """A ``mi.traverse`` key without its ``.value`` (a constant texture's): the parameter's
+    name as the plugin reads it."""
+    return key[:-len(".value")] if key.endswith(".value") else key
 
 
 def _range(key: str, low: float, high: float, valid=None) -> tuple[float, float, bool]:
     """(lo, hi, log) of a parameter from its last name, else from its values; within the
     plugin's ``valid`` range (lo, hi) where it is known; widened to its values (``low`` to
     ``high``)."""
-    name = key.split(".")[-2] if key.endswith(".value") else key.split(".")[-1]
+    name = _label(key).split(".")[-1]
     lo, hi, log = next(((lo, hi, log) for pattern, lo, hi, log in RANGES
                         if re.search(pattern, name)), (0.0, max(1.0, 2.0 * abs(high)), False))
     if valid is not None:
@@ -86,9 +92,8 @@ def controls(params, valid: dict | None = None) -> list[Control]:
         numbers = np.array(value, np.float64).ravel()
         if numbers.size not in (1, 3) or not np.all(np.isfinite(numbers)):
             continue
-        name = key[:-len(".value")] if key.endswith(".value") else key
         lo, hi, log = _range(key, float(numbers.min()), float(numbers.max()),
-                             (valid or {}).get(name))
+                             (valid or {}).get(_label(key)))
         shown = float(numbers[0]) if numbers.size == 1 else tuple(float(v) for v in numbers)
         out.append(Control(key, numbers.size, lo, hi, log, shown))
     return out
